@@ -1,0 +1,18 @@
+# pnb_add_module(NAME SOURCES...): a library target penumbra_NAME with aliases Penumbra::NAME and
+# penumbra::NAME, public headers in NAME/include, exported as NAME.
+function(pnb_add_module name dir)
+  add_library(penumbra_${name} ${ARGN})
+  add_library(Penumbra::${name} ALIAS penumbra_${name})
+  add_library(penumbra::${name} ALIAS penumbra_${name})
+  set_target_properties(penumbra_${name} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME penumbra_${name})
+  target_include_directories(penumbra_${name} PUBLIC
+    $<BUILD_INTERFACE:${dir}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_compile_options(penumbra_${name} PRIVATE -Wall -Wextra)
+  install(TARGETS penumbra_${name} EXPORT PenumbraTargets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  install(DIRECTORY ${dir}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endfunction()

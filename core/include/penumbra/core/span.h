@@ -1,0 +1,10 @@
+// core/include/penumbra/core/span.h
+#pragma once
+#include <cstddef>
+#include <span>
+
+namespace penumbra {
+/// Penumbra is C++20; Span is std::span.
+template <class T>
+using Span = std::span<T>;
+}  // namespace penumbra

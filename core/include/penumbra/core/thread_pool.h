@@ -1,0 +1,16 @@
+// core/include/penumbra/core/thread_pool.h
+#pragma once
+#include <cstddef>
+#include <functional>
+
+namespace penumbra {
+
+/// Number of worker threads Penumbra uses: PNB_NUM_THREADS if set, else hardware concurrency.
+unsigned worker_count();
+
+/// Runs body(begin, end) over [0, n) split into chunks of `grain`, on worker_count() threads,
+/// chunks handed out dynamically. Returns after all chunks ran. The first exception thrown by a
+/// chunk is rethrown on the caller's thread after the others finish.
+void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& body);
+
+}  // namespace penumbra

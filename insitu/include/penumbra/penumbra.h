@@ -1,0 +1,101 @@
+/* insitu/include/penumbra/penumbra.h -- Penumbra's C API for simulation codes (C99, Fortran via bind(C)).
+ *
+ * Typical time loop:
+ *   pnb_context ctx;  pnb_create("config.json", &ctx);        // path or JSON text
+ *   pnb_publish_mesh(ctx, &mesh, PNB_BORROW);                   // once, or when topology changes
+ *   for (step...) { pnb_publish_field(ctx, &field, PNB_BORROW); pnb_execute(ctx, time, step); }
+ *   pnb_destroy(ctx);                                           // flushes and finalizes
+ *
+ * Every call returns a status; on failure pnb_last_error(ctx) describes it. No call ever aborts
+ * the host program or lets an exception escape. A context is not thread-safe: call it from one
+ * thread at a time. Borrowed arrays (PNB_BORROW) must stay valid and unchanged until the next
+ * pnb_execute returns; Penumbra copies what it keeps. */
+#ifndef PENUMBRA_PENUMBRA_H
+#define PENUMBRA_PENUMBRA_H
+
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pnb_context_s* pnb_context;
+
+typedef enum {
+  PNB_OK = 0,
+  PNB_INVALID_ARGUMENT = 1,
+  PNB_INVALID_OPERATION = 2,
+  PNB_OUT_OF_MEMORY = 3,
+  PNB_BACKEND_UNAVAILABLE = 4,
+  PNB_INTERNAL_ERROR = 5,
+  PNB_IO_ERROR = 6
+} pnb_status;
+
+typedef enum { PNB_BORROW = 0, PNB_COPY = 1 } pnb_ownership;
+
+typedef enum { PNB_FLOAT32 = 0, PNB_FLOAT64 = 1, PNB_INT32 = 2, PNB_INT64 = 3 } pnb_type;
+
+/* VTK cell type ids. */
+enum { PNB_TETRA = 10, PNB_HEXAHEDRON = 12, PNB_WEDGE = 13, PNB_PYRAMID = 14 };
+
+typedef enum { PNB_POINT_FIELD = 0, PNB_CELL_FIELD = 1 } pnb_association;
+
+/* An unstructured mesh as views of the caller's arrays (VTK ordering).
+ * points: point_count items of xyz in point_type (PNB_FLOAT32/64), point_stride_bytes apart
+ *         (0 means packed). connectivity: connectivity_count ids in index_type (PNB_INT32/64).
+ * offsets: cell_count + 1 entries in index_type, or NULL when every cell has the same type.
+ * cell_types: one uint8 VTK id per cell, or a single entry when cell_types_count == 1.
+ * topology_version: bump when points or connectivity change; an unchanged version makes
+ *                   republishing free. */
+typedef struct {
+  const void* points;
+  int64_t point_count;
+  int64_t point_stride_bytes;
+  pnb_type point_type;
+  const void* connectivity;
+  int64_t connectivity_count;
+  const void* offsets;
+  pnb_type index_type;
+  const uint8_t* cell_types;
+  int64_t cell_types_count;
+  uint64_t topology_version;
+} pnb_mesh_desc;
+
+/* One field: count items of `components` values each, in type (PNB_FLOAT32/64), stride_bytes
+ * apart (0 means packed). */
+typedef struct {
+  const char* name;
+  pnb_association association;
+  const void* values;
+  int64_t count;
+  int components;
+  int64_t stride_bytes;
+  pnb_type type;
+} pnb_field_desc;
+
+/* Creates a context from a JSON config: a file path, or JSON text starting with '{'. */
+pnb_status pnb_create(const char* config, pnb_context* out);
+/* Publishes (or republishes) the mesh. */
+pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own);
+/* Publishes one field for the next execute. Fields the config does not render are ignored
+ * (not copied). */
+pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_ownership own);
+/* Runs the per-step pipeline for simulation time `time` and step `cycle`: renders if the
+ * config's trigger fires and appends the images to the Cinema database. A failed step is
+ * recorded and skipped; later steps still run. */
+pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle);
+/* Finalizes: flushes pending work; the context stays valid only for pnb_destroy. */
+pnb_status pnb_finalize(pnb_context ctx);
+/* Message of the last failed call on ctx (or of the last failed pnb_create when ctx is NULL);
+ * valid until the next call on ctx. Never NULL. */
+const char* pnb_last_error(pnb_context ctx);
+/* Finalizes if needed and frees ctx; accepts NULL. */
+void pnb_destroy(pnb_context ctx);
+/* Library version string, e.g. "0.1.0". */
+const char* pnb_version(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PENUMBRA_PENUMBRA_H */

@@ -1,0 +1,29 @@
+// render/include/penumbra/render/camera.h
+#pragma once
+#include "penumbra/core/vec3.h"
+
+namespace penumbra::render {
+
+/// A ray origin + t * direction (direction need not be unit length unless stated).
+struct Ray { Vec3d origin, direction; };
+
+/// Perspective pinhole camera.
+struct Camera {
+  Vec3d eye{0, 0, 1};
+  Vec3d target{0, 0, 0};
+  Vec3d up{0, 1, 0};
+  double fov_y_deg = 30.0;
+  int width = 256;
+  int height = 256;
+
+  /// Camera at `eye` looking at `target`.
+  static Camera look_at(Vec3d eye, Vec3d target, Vec3d up, double fov_y_deg, int width, int height);
+  /// Cinema orbit: phi is the azimuth around +z from +x (degrees), theta the elevation from the
+  /// xy-plane (degrees, -90..90). The eye sits on a sphere around the bounds' centre, far enough
+  /// that the whole bounding sphere fits in the view.
+  static Camera orbit(const Bounds& bounds, double phi_deg, double theta_deg, double fov_y_deg, int width, int height);
+  /// Unit-direction primary ray through the centre of pixel (px, py); py = 0 is the top row.
+  Ray primary_ray(double px, double py) const;
+};
+
+}  // namespace penumbra::render

@@ -1,0 +1,59 @@
+// render/include/penumbra/render/cpu_ray_caster.h
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "penumbra/render/camera.h"
+#include "penumbra/render/image.h"
+#include "penumbra/render/tet_mesh.h"
+#include "penumbra/render/transfer_function.h"
+
+namespace penumbra::render {
+
+/// Options shared by the renderers.
+struct RenderOptions {
+  /// Rays stop once accumulated opacity exceeds this (1 disables early termination).
+  double early_termination_opacity = 0.999;
+};
+
+/// Per-ray result, for tests and diagnostics.
+struct RayTrace {
+  double rgba[4] = {0, 0, 0, 0};  ///< premultiplied colour and opacity
+  double optical_depth = 0;       ///< integral of extinction along the ray
+  double length_inside = 0;       ///< total length of tet segments walked
+  int segments = 0;               ///< tet segments integrated
+  int entries = 0;                ///< boundary entries (1 for a convex mesh)
+};
+
+/// Multi-threaded CPU ray caster for emission-absorption through a TetMesh. Builds its
+/// acceleration structures (BVH over boundary faces) once per mesh; the mesh must outlive it.
+/// render() may be called concurrently from several threads.
+class CpuRayCaster {
+public:
+  explicit CpuRayCaster(std::shared_ptr<const TetMesh> mesh);
+  ~CpuRayCaster();
+  CpuRayCaster(const CpuRayCaster&) = delete;
+  CpuRayCaster& operator=(const CpuRayCaster&) = delete;
+
+  /// Renders per-point `scalars` (one per mesh point; NaN = no data) through `tf`.
+  Image render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+               const RenderOptions& options = {}) const;
+  /// Traces one ray (origin + t*unit direction, t >= 0), no early termination.
+  RayTrace trace(const std::vector<float>& scalars, const TransferFunction& tf, const Ray& ray) const;
+
+  const TetMesh& mesh() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+/// Double-precision reference: for every pixel, finds all ray-tet intersections through a BVH
+/// over all tets (independent of adjacency and of the walk), sorts them, and integrates each
+/// segment by adaptive quadrature to 1e-9 relative. Slow; ground truth for tests and benchmarks.
+Image render_reference(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf,
+                       const Camera& camera);
+RayTrace trace_reference(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf,
+                         const Ray& ray);
+
+}  // namespace penumbra::render

@@ -1,0 +1,47 @@
+// render/include/penumbra/render/tet_mesh.h
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "penumbra/core/mesh_view.h"
+#include "penumbra/core/vec3.h"
+
+namespace penumbra::render {
+
+class BoundarySurface;
+
+/// A boundary face: face `face` (the one opposite vertex `face`) of tet `tet`.
+struct BoundaryFace {
+  std::int32_t tet;
+  std::int32_t face;
+};
+
+/// A render-ready, owned tetrahedral mesh prepared from a MeshView: non-tet cells split
+/// conformingly (each quad face takes the diagonal through its smallest global vertex id),
+/// every tet positively oriented, face adjacency built, duplicate points welded for adjacency.
+///
+/// `tets` keep the caller's original point ids, so per-point field values index them directly;
+/// adjacency is built on welded ids, so coincident duplicate points do not make false internal
+/// boundaries. Immutable after preparation; safe to share between threads for reading.
+struct TetMesh {
+  std::vector<Vec3d> points;                          ///< copy of the caller's points
+  std::vector<std::array<std::int32_t, 4>> tets;      ///< original point ids, positive volume
+  std::vector<std::array<std::int32_t, 4>> neighbors; ///< tet across the face opposite vertex k, -1 on the boundary
+  std::vector<std::int64_t> source_cell;              ///< input cell each tet came from
+  std::vector<BoundaryFace> boundary;                 ///< unmatched faces
+  Bounds bounds;
+  std::size_t welded_points = 0;     ///< duplicate points merged for adjacency
+  std::size_t reoriented_tets = 0;   ///< input tets whose orientation was flipped
+  std::uint64_t topology_version = 0;
+  std::shared_ptr<const BoundarySurface> surface;  ///< OpenMesh boundary surface (entry/exit, geometry)
+
+  std::size_t tet_count() const { return tets.size(); }
+};
+
+/// Prepares `mesh` for rendering; validates it first (see validate_mesh) and throws
+/// penumbra::Error(invalid_argument) naming the offending cell or point. `call` prefixes errors.
+TetMesh prepare_tet_mesh(const MeshView& mesh, const char* call = "prepare_tet_mesh");
+
+}  // namespace penumbra::render

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs every build, test and benchmark dependency on Debian 12 (bookworm) with apt.
+# Idempotent: packages already present are skipped quickly.
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config ninja-build
+  libvtk9-dev python3-vtk9 xvfb xauth
+  libopenmesh-dev
+  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri mesa-utils
+  libpng-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libzfp-dev libzstd-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

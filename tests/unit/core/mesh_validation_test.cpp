@@ -1,0 +1,90 @@
+// tests/unit/core/mesh_validation_test.cpp
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "fixtures/meshes.h"
+#include "penumbra/core/error.h"
+#include "penumbra/core/mesh_validation.h"
+
+using namespace penumbra;
+using fixtures::BlockCells;
+
+namespace {
+std::string validation_error(const MeshView& v) {
+  try {
+    validate_mesh(v, "test");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(MeshValidation, AcceptsEveryBlockKind) {
+  for (auto kind : {BlockCells::tets, BlockCells::hexes, BlockCells::wedges, BlockCells::pyramids}) {
+    const auto m = fixtures::block(kind, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
+    EXPECT_EQ(validation_error(m.view()), "") << int(kind);
+  }
+}
+
+TEST(MeshValidation, NamesOutOfRangeIndex) {
+  auto m = fixtures::block(BlockCells::tets, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
+  m.connectivity[4 * 7 + 2] = 9999;
+  const std::string msg = validation_error(m.view());
+  EXPECT_NE(msg.find("cell 7"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("9999"), std::string::npos) << msg;
+  m.connectivity[4 * 7 + 2] = -1;
+  EXPECT_NE(validation_error(m.view()).find("cell 7"), std::string::npos);
+}
+
+TEST(MeshValidation, NamesNonFiniteCoordinate) {
+  auto m = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
+  m.xyz[3 * 5 + 1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(validation_error(m.view()).find("point 5"), std::string::npos);
+  m.xyz[3 * 5 + 1] = std::numeric_limits<double>::infinity();
+  EXPECT_NE(validation_error(m.view()).find("point 5"), std::string::npos);
+}
+
+TEST(MeshValidation, NamesZeroVolumeCell) {
+  fixtures::OwnedMesh m;
+  for (double x : {0.0, 1.0})
+    for (double y : {0.0, 1.0}) m.add_point(x, y, 0);  // four coplanar points
+  m.add_point(0, 0, 1);
+  m.add_cell(10, {0, 1, 2, 4});
+  m.add_cell(10, {0, 1, 2, 3});
+  const std::string msg = validation_error(m.view());
+  EXPECT_NE(msg.find("cell 1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("zero volume"), std::string::npos) << msg;
+}
+
+TEST(MeshValidation, RejectsSizeMismatchAndUnknownType) {
+  auto m = fixtures::block(BlockCells::tets, 1, 1, 1, {0, 0, 0}, {1, 1, 1});
+  auto v = m.view();
+  v.cell_type_count = 3;  // neither 1 nor the cell count
+  EXPECT_NE(validation_error(v).find("cell types"), std::string::npos);
+  m.types[2] = 7;  // VTK polygon: not a volume cell
+  EXPECT_NE(validation_error(m.view()).find("cell 2"), std::string::npos);
+  auto v2 = m.view();
+  v2.connectivity.count = 0;
+  EXPECT_NE(validation_error(v2), "");
+}
+
+TEST(MeshValidation, InvertedTetIsNotAnError) {
+  auto m = fixtures::block(BlockCells::tets, 1, 1, 1, {0, 0, 0}, {1, 1, 1});
+  std::swap(m.connectivity[0], m.connectivity[1]);
+  EXPECT_EQ(validation_error(m.view()), "");
+}
+
+TEST(MeshValidation, UniformCellTypeWithoutOffsets) {
+  auto m = fixtures::block(BlockCells::hexes, 2, 1, 1, {0, 0, 0}, {1, 1, 1});
+  auto v = m.view();
+  v.offsets = {};
+  v.cell_type_count = 1;
+  EXPECT_EQ(v.cell_count(), 2u);
+  EXPECT_EQ(validation_error(v), "");
+  v.connectivity.count = 11;  // not a multiple of 8
+  EXPECT_NE(validation_error(v).find("multiple of 8"), std::string::npos);
+}
