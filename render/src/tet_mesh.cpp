@@ -1,0 +1,169 @@
+// render/src/tet_mesh.cpp -- from a solver's MeshView to a render-ready TetMesh
+#include "penumbra/render/tet_mesh.h"
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <unordered_map>
+
+#include "cell_split.h"
+#include "penumbra/core/error.h"
+#include "penumbra/core/mesh_validation.h"
+#include "penumbra/core/thread_pool.h"
+#include "penumbra/render/boundary_surface.h"
+
+namespace penumbra::render {
+namespace {
+
+// Face k of a tet is the one opposite vertex k; listed so that its normal (right hand) points
+// out of a positively oriented tet.
+constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+struct Bits3 {
+  std::uint64_t x, y, z;
+  bool operator==(const Bits3&) const = default;
+};
+struct Bits3Hash {
+  std::size_t operator()(const Bits3& b) const noexcept {
+    return std::hash<std::uint64_t>()(b.x * 0x9E3779B97F4A7C15ull ^ (b.y + 0x632BE59BD9B4E019ull) * 31 ^ b.z);
+  }
+};
+
+std::uint64_t bits(double v) {
+  if (v == 0.0) v = 0.0;  // -0 and +0 are the same place
+  std::uint64_t b;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+// Maps every point to the smallest id of the points at exactly the same coordinates. Solvers
+// that duplicate points along material or partition interfaces would otherwise get false
+// internal boundaries (and rays would stop there).
+std::vector<std::int32_t> weld_points(const std::vector<Vec3d>& points, std::size_t& welded) {
+  std::vector<std::int32_t> canon(points.size());
+  std::unordered_map<Bits3, std::int32_t, Bits3Hash> first;
+  first.reserve(points.size());
+  welded = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto [it, inserted] =
+        first.try_emplace(Bits3{bits(points[i].x), bits(points[i].y), bits(points[i].z)}, static_cast<std::int32_t>(i));
+    canon[i] = it->second;
+    welded += inserted ? 0 : 1;
+  }
+  return canon;
+}
+
+void split_cells(const MeshView& view, const std::vector<std::int32_t>& canon, TetMesh& out) {
+  const std::size_t nc = view.cell_count();
+  std::vector<std::array<std::uint8_t, 4>> local;
+  std::int64_t ids[8], key[8];
+  out.tets.reserve(nc);
+  out.source_cell.reserve(nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const std::uint8_t type = view.cell_type(c);
+    const int n = cell_point_count(type);
+    const std::int64_t b = view.cell_begin(c);
+    for (int k = 0; k < n; ++k) {
+      ids[k] = view.connectivity[static_cast<std::size_t>(b + k)];
+      key[k] = canon[static_cast<std::size_t>(ids[k])];
+    }
+    local.clear();
+    detail::split_cell(type, key, local);
+    for (const auto& t : local) {
+      std::array<std::int32_t, 4> tet{};
+      for (int k = 0; k < 4; ++k) tet[k] = static_cast<std::int32_t>(ids[t[k]]);
+      out.tets.push_back(tet);
+      out.source_cell.push_back(static_cast<std::int64_t>(c));
+    }
+  }
+}
+
+std::size_t orient_tets(TetMesh& m, const MeshView& view) {
+  std::size_t flipped_input_tets = 0;
+  for (std::size_t t = 0; t < m.tets.size(); ++t) {
+    auto& v = m.tets[t];
+    if (signed_volume6(m.points[v[0]], m.points[v[1]], m.points[v[2]], m.points[v[3]]) < 0) {
+      std::swap(v[2], v[3]);
+      if (view.cell_type(static_cast<std::size_t>(m.source_cell[t])) == 10) ++flipped_input_tets;
+    }
+  }
+  return flipped_input_tets;
+}
+
+struct FaceRecord {
+  std::array<std::int32_t, 3> key;  // sorted welded ids
+  std::int32_t slot;                // tet * 4 + face
+  bool operator<(const FaceRecord& o) const { return key < o.key || (key == o.key && slot < o.slot); }
+};
+
+void build_adjacency(TetMesh& m, const std::vector<std::int32_t>& canon) {
+  const std::size_t nt = m.tets.size();
+  std::vector<FaceRecord> faces(nt * 4);
+  parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t)
+      for (int f = 0; f < 4; ++f) {
+        std::array<std::int32_t, 3> k{};
+        for (int j = 0; j < 3; ++j) k[j] = canon[static_cast<std::size_t>(m.tets[t][kFaceVertices[f][j]])];
+        std::sort(k.begin(), k.end());
+        faces[t * 4 + f] = {k, static_cast<std::int32_t>(t * 4 + f)};
+      }
+  });
+  std::sort(faces.begin(), faces.end());
+  m.neighbors.assign(nt, {-1, -1, -1, -1});
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i + 1;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i > 2) {
+      const auto cell = [&](std::size_t r) { return std::to_string(m.source_cell[static_cast<std::size_t>(faces[r].slot / 4)]); };
+      throw Error(ErrorCode::invalid_argument, "face shared by " + std::to_string(j - i) +
+                                                   " cells (overlapping or non-manifold mesh): cells " + cell(i) +
+                                                   ", " + cell(i + 1) + ", " + cell(i + 2));
+    }
+    if (j - i == 2) {
+      const std::int32_t a = faces[i].slot, b = faces[i + 1].slot;
+      m.neighbors[static_cast<std::size_t>(a / 4)][a % 4] = b / 4;
+      m.neighbors[static_cast<std::size_t>(b / 4)][b % 4] = a / 4;
+    } else {
+      m.boundary.push_back({faces[i].slot / 4, faces[i].slot % 4});
+    }
+    i = j;
+  }
+}
+
+std::shared_ptr<const BoundarySurface> make_surface(const TetMesh& m, const std::vector<std::int32_t>& canon) {
+  std::vector<std::array<std::int32_t, 3>> tris;
+  tris.reserve(m.boundary.size());
+  for (const auto& bf : m.boundary) {
+    const auto& t = m.tets[static_cast<std::size_t>(bf.tet)];
+    tris.push_back({canon[static_cast<std::size_t>(t[kFaceVertices[bf.face][0]])],
+                    canon[static_cast<std::size_t>(t[kFaceVertices[bf.face][1]])],
+                    canon[static_cast<std::size_t>(t[kFaceVertices[bf.face][2]])]});
+  }
+  return std::make_shared<const BoundarySurface>(m.points, tris);
+}
+
+}  // namespace
+
+TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
+  validate_mesh(view, call);
+  require(view.point_count() < static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()),
+          std::string(call) + ": more than 2^31-1 points are not supported");
+  TetMesh m;
+  m.topology_version = view.topology_version;
+  m.points.resize(view.point_count());
+  for (std::size_t i = 0; i < m.points.size(); ++i) {
+    m.points[i] = view.point(i);
+    m.bounds.extend(m.points[i]);
+  }
+  const auto canon = weld_points(m.points, m.welded_points);
+  split_cells(view, canon, m);
+  require(m.tets.size() < static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4),
+          std::string(call) + ": more than 2^29 tets are not supported");
+  m.reoriented_tets = orient_tets(m, view);
+  build_adjacency(m, canon);
+  m.surface = make_surface(m, canon);
+  return m;
+}
+
+}  // namespace penumbra::render
