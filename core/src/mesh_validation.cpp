@@ -25,6 +25,9 @@ double decomposed_volume6(const Vec3d* p, const int (&tets)[N][4]) {
 
 std::string cell_name(std::size_t c) { return "cell " + std::to_string(c); }
 
+// Per-item checks call this only on failure, so the message is never built on the hot path.
+[[noreturn]] void fail(const std::string& message) { throw Error(ErrorCode::invalid_argument, message); }
+
 }  // namespace
 
 void validate_mesh(const MeshView& m, const char* call) {
@@ -56,21 +59,22 @@ void validate_mesh(const MeshView& m, const char* call) {
   const std::size_t np = m.point_count();
   for (std::size_t i = 0; i < np; ++i) {
     const Vec3d p = m.point(i);
-    require(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z),
-            who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+      fail(who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
   }
   const std::size_t nc = m.cell_count();
   require(nc > 0, who + "mesh has no cells");
   for (std::size_t c = 0; c < nc; ++c) {
     const std::uint8_t type = m.cell_type(c);
     const int n = cell_point_count(type);
-    require(n > 0, who + cell_name(c) + " has unsupported VTK cell type " + std::to_string(type) +
-                       " (expected 10 tetra, 12 hexahedron, 13 wedge or 14 pyramid)");
+    if (n <= 0)
+      fail(who + cell_name(c) + " has unsupported VTK cell type " + std::to_string(type) +
+           " (expected 10 tetra, 12 hexahedron, 13 wedge or 14 pyramid)");
     const std::int64_t b = m.cell_begin(c);
     if (m.offsets.count > 0) {
       const std::int64_t e = m.offsets[c + 1];
-      require(b >= 0 && e - b == n && static_cast<std::size_t>(e) <= m.connectivity.count,
-              who + cell_name(c) + " has offsets [" + std::to_string(b) + ", " + std::to_string(e) +
+      if (!(b >= 0 && e - b == n && static_cast<std::size_t>(e) <= m.connectivity.count))
+        fail(who + cell_name(c) + " has offsets [" + std::to_string(b) + ", " + std::to_string(e) +
                   ") but a VTK type " + std::to_string(type) + " cell needs " + std::to_string(n) +
                   " ids within the " + std::to_string(m.connectivity.count) + " connectivity entries");
     }
@@ -78,8 +82,8 @@ void validate_mesh(const MeshView& m, const char* call) {
     Bounds box;
     for (int k = 0; k < n; ++k) {
       const std::int64_t id = m.connectivity[static_cast<std::size_t>(b + k)];
-      require(id >= 0 && static_cast<std::size_t>(id) < np,
-              who + cell_name(c) + " references point " + std::to_string(id) + ", outside [0, " +
+      if (!(id >= 0 && static_cast<std::size_t>(id) < np))
+        fail(who + cell_name(c) + " references point " + std::to_string(id) + ", outside [0, " +
                   std::to_string(np) + ")");
       p[k] = m.point(static_cast<std::size_t>(id));
       box.extend(p[k]);
@@ -94,8 +98,8 @@ void validate_mesh(const MeshView& m, const char* call) {
     // Relative test: a cell whose volume is below 1e-12 of its bounding-box diagonal cubed is
     // degenerate at float precision (rays could not resolve it) and its gradient is undefined.
     const double d = box.diagonal();
-    require(std::fabs(v6) > 6e-12 * d * d * d,
-            who + cell_name(c) + " has zero volume (degenerate VTK type " + std::to_string(type) + " cell)");
+    if (!(std::fabs(v6) > 6e-12 * d * d * d))
+      fail(who + cell_name(c) + " has zero volume (degenerate VTK type " + std::to_string(type) + " cell)");
   }
 }
 

@@ -94,7 +94,12 @@ std::size_t orient_tets(TetMesh& m, const MeshView& view) {
 struct FaceRecord {
   std::array<std::int32_t, 3> key;  // sorted welded ids
   std::int32_t slot;                // tet * 4 + face
-  bool operator<(const FaceRecord& o) const { return key < o.key || (key == o.key && slot < o.slot); }
+  bool operator<(const FaceRecord& o) const {
+    if (key[0] != o.key[0]) return key[0] < o.key[0];
+    if (key[1] != o.key[1]) return key[1] < o.key[1];
+    if (key[2] != o.key[2]) return key[2] < o.key[2];
+    return slot < o.slot;
+  }
 };
 
 void build_adjacency(TetMesh& m, const std::vector<std::int32_t>& canon) {
