@@ -3,7 +3,7 @@
 # Idempotent: packages already present are skipped quickly.
 set -euo pipefail
 packages=(
-  build-essential cmake pkg-config ninja-build
+  build-essential gfortran cmake pkg-config ninja-build
   libvtk9-dev python3-vtk9 xvfb xauth
   libopenmesh-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri mesa-utils

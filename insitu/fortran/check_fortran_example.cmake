@@ -1,0 +1,12 @@
+# Runs the Fortran mini-app into a fresh directory and checks that it wrote a Cinema database.
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${EXE} ${OUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "fortran example failed (${rc}): ${out} ${err}")
+endif()
+file(STRINGS ${OUT}/data.csv rows)
+list(LENGTH rows n)
+# Steps 0, 5, 10, 15, 20 with one camera and one field, plus the header row.
+if(NOT n EQUAL 6)
+  message(FATAL_ERROR "expected 6 lines in data.csv, got ${n}: ${rows}")
+endif()

@@ -1,0 +1,110 @@
+! insitu/fortran/heat_fortran.f90 -- a Fortran caller: explicit heat diffusion on a hex grid,
+! rendered through the C API. Usage: penumbra-example-fortran [OUTPUT_DIR]
+program heat_fortran
+  use, intrinsic :: iso_c_binding
+  use penumbra
+  implicit none
+  integer, parameter :: n = 12, np = (n + 1)**3, nc = n**3, steps = 20
+  real(c_double), target :: xyz(3, np), temp(np), next(np)
+  integer(c_int32_t), target :: conn(8, nc)
+  integer(c_int8_t), target :: types(1)
+  character(kind=c_char, len=32), target :: field_name
+  character(len=256) :: outdir
+  character(len=:), allocatable :: config
+  type(c_ptr) :: ctx
+  type(pnb_mesh_desc) :: mesh
+  type(pnb_field_desc) :: field
+  integer :: i, j, k, c, s, status, p
+
+  outdir = 'penumbra-fortran-db'
+  if (command_argument_count() >= 1) call get_command_argument(1, outdir)
+
+  do k = 0, n
+    do j = 0, n
+      do i = 0, n
+        p = 1 + i + (n + 1) * (j + (n + 1) * k)
+        xyz(:, p) = [real(i, c_double), real(j, c_double), real(k, c_double)] / n
+        temp(p) = exp(-40.0d0 * sum((xyz(:, p) - 0.5d0)**2))
+      end do
+    end do
+  end do
+  c = 0
+  do k = 0, n - 1
+    do j = 0, n - 1
+      do i = 0, n - 1
+        c = c + 1
+        conn(:, c) = [id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k), &
+                      id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)]
+      end do
+    end do
+  end do
+  types(1) = PNB_HEXAHEDRON
+
+  config = '{"output":{"directory":"' // trim(outdir) // '","if_exists":"resume"},' // &
+           '"image":{"width":96,"height":96},"cameras":{"phi":[30],"theta":[20]},' // &
+           '"fields":[{"name":"temperature","range":[0,1],"transfer_function":{' // &
+           '"colors":[[0,0.2,0.3,0.9],[1,1,0.4,0.1]],"opacities":[[0,0],[1,8]]}}],' // &
+           '"trigger":{"every":5}}'
+  status = pnb_create(config // c_null_char, ctx)
+  if (status /= PNB_OK) then
+    print *, 'pnb_create failed: ', pnb_last_error_message(c_null_ptr)
+    stop 1
+  end if
+
+  mesh%points = c_loc(xyz)
+  mesh%point_count = np
+  mesh%point_type = PNB_FLOAT64
+  mesh%connectivity = c_loc(conn)
+  mesh%connectivity_count = 8 * nc
+  mesh%index_type = PNB_INT32
+  mesh%cell_types = c_loc(types)
+  mesh%cell_types_count = 1
+  mesh%topology_version = 1
+  call check(pnb_publish_mesh(ctx, mesh, PNB_BORROW))
+
+  field_name = 'temperature' // c_null_char
+  field%name = c_loc(field_name)
+  field%association = PNB_POINT_FIELD
+  field%values = c_loc(temp)
+  field%count = np
+  field%type = PNB_FLOAT64
+  do s = 0, steps
+    call check(pnb_publish_field(ctx, field, PNB_BORROW))
+    call check(pnb_execute(ctx, 0.01d0 * s, int(s, c_int64_t)))
+    call diffuse()
+  end do
+  call check(pnb_finalize(ctx))
+  call pnb_destroy(ctx)
+  print '(a)', 'wrote ' // trim(outdir)
+
+contains
+
+  integer(c_int32_t) function id(i, j, k)
+    integer, intent(in) :: i, j, k
+    id = int(i + (n + 1) * (j + (n + 1) * k), c_int32_t)   ! zero-based, as the C API expects
+  end function
+
+  subroutine diffuse()
+    integer :: a, b, q, r
+    next = temp
+    do r = 1, n - 1
+      do b = 1, n - 1
+        do a = 1, n - 1
+          q = 1 + a + (n + 1) * (b + (n + 1) * r)
+          next(q) = temp(q) + 0.1d0 * (temp(q - 1) + temp(q + 1) + temp(q - (n + 1)) + temp(q + (n + 1)) + &
+                    temp(q - (n + 1)**2) + temp(q + (n + 1)**2) - 6 * temp(q))
+        end do
+      end do
+    end do
+    temp = next
+  end subroutine
+
+  subroutine check(st)
+    integer(c_int), intent(in) :: st
+    if (st /= PNB_OK) then
+      print *, 'penumbra error: ', pnb_last_error_message(ctx)
+      stop 2
+    end if
+  end subroutine
+
+end program heat_fortran
