@@ -10,6 +10,7 @@ packages=(
   libpng-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libzfp-dev libzstd-dev
+  gmsh  # benchmark meshes (bench/run.sh)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,72 @@
+// bench/render/bench_util.h -- timing and output helpers shared by the benchmark programs
+#pragma once
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace penumbra::bench {
+
+/// Milliseconds elapsed since construction.
+class Stopwatch {
+public:
+  double ms() const {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
+  }
+
+private:
+  std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
+};
+
+/// Median of `values` (mean of the middle two for an even count); 0 for none.
+inline double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/// `v` rounded to `digits` decimals, so JSON lines stay readable.
+inline double rounded(double v, int digits = 3) {
+  const double scale = std::pow(10.0, digits);
+  return std::round(v * scale) / scale;
+}
+
+/// Value of command-line option `--name VALUE`, or `fallback` when absent.
+inline std::string option(int argc, char** argv, const std::string& name, const std::string& fallback) {
+  for (int i = 1; i + 1 < argc; ++i)
+    if (argv[i] == "--" + name) return argv[i + 1];
+  return fallback;
+}
+
+}  // namespace penumbra::bench
+
+namespace penumbra::bench {
+
+/// Difference of a rendered 8-bit RGB image from the reference.
+struct ImageError {
+  double rms_pct = 0;       ///< RMS over all pixels and channels, in % of 255
+  int max_abs = 0;          ///< largest channel difference, in 8-bit levels
+  std::size_t bad_pixels = 0;  ///< pixels with some channel off by more than 10% of 255
+};
+
+/// Compares equal-size RGB8 buffers.
+inline ImageError compare_rgb8(const std::vector<unsigned char>& image, const std::vector<unsigned char>& reference) {
+  ImageError e;
+  double sum = 0;
+  for (std::size_t p = 0; p + 2 < image.size() && p + 2 < reference.size(); p += 3) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int d = std::abs(static_cast<int>(image[p + c]) - static_cast<int>(reference[p + c]));
+      sum += static_cast<double>(d) * d;
+      worst = std::max(worst, d);
+    }
+    e.max_abs = std::max(e.max_abs, worst);
+    if (worst > 25) ++e.bad_pixels;
+  }
+  if (!image.empty()) e.rms_pct = 100.0 * std::sqrt(sum / static_cast<double>(image.size())) / 255.0;
+  return e;
+}
+
+}  // namespace penumbra::bench

@@ -1,0 +1,140 @@
+// bench/render/penumbra_render_bench.cpp -- times Penumbra's CPU ray caster on a benchmark scene
+// and measures its error against the double-precision reference renderer.
+//
+// Usage: pnb_bench_render_penumbra --scene NAME --data-dir DIR [--frames N] [--refresh-reference 1]
+// Prints one JSON object on stdout. Writes DIR/images/NAME-penumbra-cpu.png and caches the
+// reference image as DIR/reference/NAME-WxH-DIGEST.png (computed only when missing).
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "bench_util.h"
+#include "penumbra/core/error.h"
+#include "penumbra/core/thread_pool.h"
+#include "penumbra/render/cpu_ray_caster.h"
+#include "penumbra/render/image.h"
+#include "scene.h"
+
+namespace pb = penumbra::bench;
+namespace pr = penumbra::render;
+
+namespace {
+
+penumbra::MeshView mesh_view(const pb::Scene& scene) {
+  static const std::uint8_t tetra = 10;
+  penumbra::MeshView view;
+  view.points = {reinterpret_cast<const std::byte*>(scene.points.data()), scene.point_count(), 3 * sizeof(double)};
+  view.point_type = penumbra::ScalarType::float64;
+  view.connectivity = {scene.tets.data(), scene.tets.size(), penumbra::ScalarType::int64};
+  view.cell_types = &tetra;
+  view.cell_type_count = 1;
+  view.topology_version = 1;
+  return view;
+}
+
+pr::TransferFunction transfer_function(const pb::Scene& scene) {
+  pr::TransferFunction tf;
+  for (const pb::TfNode& n : scene.tf) {
+    tf.colors.push_back({n.x, n.r, n.g, n.b});
+    tf.opacities.push_back({n.x, n.extinction});
+  }
+  return tf;
+}
+
+pr::Camera camera(const pb::Scene& scene) {
+  const pb::SceneCamera& c = scene.camera;
+  return pr::Camera::look_at(c.eye, c.target, c.up, c.fov_y_deg, scene.width, scene.height);
+}
+
+int run(int argc, char** argv) {
+  const std::string name = pb::option(argc, argv, "scene", "");
+  const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
+  const bool refresh = pb::option(argc, argv, "refresh-reference", "0") != "0";
+  penumbra::require(!name.empty() && !data_dir.empty(),
+                    "pnb_bench_render_penumbra: --scene NAME and --data-dir DIR are required");
+  penumbra::require(frames >= 1, "pnb_bench_render_penumbra: --frames must be >= 1");
+
+  pb::Stopwatch load_clock;
+  const pb::Scene scene = pb::load_scene(name, data_dir);
+  const double load_ms = load_clock.ms();
+
+  // Mesh preparation and acceleration structures are built once per topology in a run, so
+  // they are reported apart from the per-frame time.
+  pb::Stopwatch prepare_clock;
+  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(mesh_view(scene), "bench"));
+  const pr::CpuRayCaster caster(mesh);
+  const double prepare_ms = prepare_clock.ms();
+
+  const pr::TransferFunction tf = transfer_function(scene);
+  const pr::Camera cam = camera(scene);
+
+  // The reference takes minutes at 1M tets; it depends only on the scene, so it is cached.
+  const std::string ref_path = pb::reference_path(scene, data_dir);
+  std::vector<unsigned char> reference;
+  double reference_ms = -1;
+  if (refresh || !std::filesystem::exists(ref_path)) {
+    pb::Stopwatch ref_clock;
+    const pr::Image ref = pr::render_reference(*mesh, scene.scalars, tf, cam);
+    reference_ms = ref_clock.ms();
+    reference = pr::to_rgb8(ref, scene.background);
+    std::filesystem::create_directories(std::filesystem::path(ref_path).parent_path());
+    pr::write_png(ref_path, reference, scene.width, scene.height);
+  } else {
+    int w = 0, h = 0;
+    reference = pr::read_png_rgb(ref_path, w, h);
+    penumbra::require(w == scene.width && h == scene.height, "reference '" + ref_path + "' has the wrong size");
+  }
+
+  pr::Image image = caster.render(scene.scalars, tf, cam);  // warm-up: first touch of caches and pages
+  std::vector<double> times;
+  for (int f = 0; f < frames; ++f) {
+    pb::Stopwatch frame_clock;
+    image = caster.render(scene.scalars, tf, cam);
+    times.push_back(frame_clock.ms());
+  }
+  const std::vector<unsigned char> rgb = pr::to_rgb8(image, scene.background);
+  const std::string image_path = data_dir + "/images/" + scene.name + "-penumbra-cpu.png";
+  std::filesystem::create_directories(data_dir + "/images");
+  pr::write_png(image_path, rgb, scene.width, scene.height);
+  const pb::ImageError err = pb::compare_rgb8(rgb, reference);
+
+  nlohmann::ordered_json line;
+  line["bench"] = "render";
+  line["scene"] = scene.name;
+  line["scene_kind"] = scene.kind;
+  line["renderer"] = "penumbra-cpu";
+  line["tets"] = scene.tet_count();
+  line["points"] = scene.point_count();
+  line["width"] = scene.width;
+  line["height"] = scene.height;
+  line["frames"] = frames;
+  line["ms_per_frame"] = pb::rounded(pb::median(times));
+  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
+  line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
+  line["max_abs_error"] = err.max_abs;
+  line["bad_pixels"] = err.bad_pixels;
+  line["threads"] = penumbra::worker_count();
+  line["load_ms"] = pb::rounded(load_ms, 1);
+  line["prepare_ms"] = pb::rounded(prepare_ms, 1);
+  if (reference_ms >= 0) line["reference_ms"] = pb::rounded(reference_ms, 1);
+  line["reference"] = ref_path;
+  line["image"] = image_path;
+  std::cout << line.dump() << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pnb_bench_render_penumbra: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,245 @@
+// bench/render/vtk_render_bench.cpp -- renders a benchmark scene with VTK 9's unstructured-grid
+// volume mappers (vtkUnstructuredGridVolumeRayCastMapper, vtkUnstructuredGridVolumeZSweepMapper)
+// and measures their error against Penumbra's cached double-precision reference image.
+//
+// Usage: pnb_bench_render_vtk --scene NAME --data-dir DIR [--frames N]
+//                             [--renderers vtk-raycast,vtk-zsweep] [--integrator linear|default]
+// Debian's VTK renders through X11 only: run it under xvfb-run. Prints one JSON object per mapper.
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkColorTransferFunction.h>
+#include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPiecewiseFunction.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkUnstructuredGridLinearRayIntegrator.h>
+#include <vtkUnstructuredGridVolumeMapper.h>
+#include <vtkUnstructuredGridVolumeRayCastMapper.h>
+#include <vtkUnstructuredGridVolumeZSweepMapper.h>
+#include <vtkVolume.h>
+#include <vtkVolumeProperty.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "bench_util.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/image.h"
+#include "scene.h"
+
+namespace pb = penumbra::bench;
+namespace pr = penumbra::render;
+
+namespace {
+
+vtkSmartPointer<vtkUnstructuredGrid> make_grid(const pb::Scene& scene) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(scene.point_count()));
+  for (std::size_t i = 0; i < scene.point_count(); ++i)
+    points->SetPoint(static_cast<vtkIdType>(i), &scene.points[i * 3]);
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(scene.tet_count() + 1));
+  for (std::size_t c = 0; c <= scene.tet_count(); ++c) offsets->SetValue(static_cast<vtkIdType>(c), 4 * static_cast<vtkIdType>(c));
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(scene.tets.size()));
+  for (std::size_t i = 0; i < scene.tets.size(); ++i) connectivity->SetValue(static_cast<vtkIdType>(i), scene.tets[i]);
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  vtkNew<vtkFloatArray> scalars;
+  scalars->SetName("s");
+  scalars->SetNumberOfValues(static_cast<vtkIdType>(scene.scalars.size()));
+  for (std::size_t i = 0; i < scene.scalars.size(); ++i) scalars->SetValue(static_cast<vtkIdType>(i), scene.scalars[i]);
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->SetPoints(points);
+  grid->SetCells(VTK_TETRA, cells);
+  grid->GetPointData()->SetScalars(scalars);
+  return grid;
+}
+
+// One node list for colour and opacity: VTK's unstructured integrators take breakpoints from
+// the colour function only. With a unit distance of 1, the opacity value is the extinction per
+// world unit (the linear integrator divides the opacity by ScalarOpacityUnitDistance).
+vtkSmartPointer<vtkVolumeProperty> make_property(const pb::Scene& scene) {
+  vtkNew<vtkColorTransferFunction> color;
+  color->SetColorSpaceToRGB();
+  vtkNew<vtkPiecewiseFunction> opacity;
+  for (const pb::TfNode& n : scene.tf) {
+    color->AddRGBPoint(n.x, n.r, n.g, n.b);
+    opacity->AddPoint(n.x, n.extinction);
+  }
+  auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+  property->SetColor(color);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(1.0);
+  property->SetInterpolationTypeToLinear();
+  property->ShadeOff();
+  return property;
+}
+
+template <class Mapper>
+void fix_resolution(Mapper* mapper) {
+  // By default both mappers lower their image resolution to meet a frame-rate budget.
+  mapper->SetAutoAdjustSampleDistances(0);
+  mapper->SetImageSampleDistance(1.0f);
+  mapper->SetMinimumImageSampleDistance(1.0f);
+  mapper->SetMaximumImageSampleDistance(1.0f);
+}
+
+vtkSmartPointer<vtkUnstructuredGridVolumeMapper> make_mapper(const std::string& renderer, bool linear_integrator) {
+  vtkSmartPointer<vtkUnstructuredGridVolumeRayIntegrator> integrator;
+  if (linear_integrator) integrator = vtkSmartPointer<vtkUnstructuredGridLinearRayIntegrator>::New();
+  if (renderer == "vtk-raycast") {
+    auto m = vtkSmartPointer<vtkUnstructuredGridVolumeRayCastMapper>::New();
+    fix_resolution(m.Get());
+    if (integrator) m->SetRayIntegrator(integrator);
+    return m;
+  }
+  if (renderer == "vtk-zsweep") {
+    auto m = vtkSmartPointer<vtkUnstructuredGridVolumeZSweepMapper>::New();
+    fix_resolution(m.Get());
+    if (integrator) m->SetRayIntegrator(integrator);
+    return m;
+  }
+  throw penumbra::Error(penumbra::ErrorCode::invalid_argument,
+                        "pnb_bench_render_vtk: unknown renderer '" + renderer + "', expected vtk-raycast or vtk-zsweep");
+}
+
+// Reads the back buffer as 8-bit RGB, top row first (VTK's rows start at the bottom).
+std::vector<unsigned char> read_back(vtkRenderWindow* window, int width, int height) {
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  grab->ShouldRerenderOff();
+  grab->Update();
+  vtkImageData* img = grab->GetOutput();
+  int dims[3];
+  img->GetDimensions(dims);
+  penumbra::require(dims[0] == width && dims[1] == height, "pnb_bench_render_vtk: framebuffer has the wrong size");
+  auto* px = static_cast<unsigned char*>(img->GetScalarPointer());
+  std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
+  for (int y = 0; y < height; ++y)
+    std::copy(px + static_cast<std::size_t>(height - 1 - y) * width * 3, px + static_cast<std::size_t>(height - y) * width * 3,
+              rgb.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * width * 3));
+  return rgb;
+}
+
+nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid* grid, const std::string& renderer,
+                                    bool linear_integrator, int frames, const std::vector<unsigned char>& reference,
+                                    const std::string& data_dir) {
+  auto mapper = make_mapper(renderer, linear_integrator);
+  mapper->SetInputData(grid);
+  vtkNew<vtkVolume> volume;
+  volume->SetMapper(mapper);
+  volume->SetProperty(make_property(scene));
+
+  vtkNew<vtkRenderer> ren;
+  ren->SetBackground(scene.background[0], scene.background[1], scene.background[2]);
+  ren->AddVolume(volume);
+  vtkCamera* cam = ren->GetActiveCamera();
+  const pb::SceneCamera& c = scene.camera;
+  cam->SetPosition(c.eye.x, c.eye.y, c.eye.z);
+  cam->SetFocalPoint(c.target.x, c.target.y, c.target.z);
+  cam->SetViewUp(c.up.x, c.up.y, c.up.z);
+  cam->SetViewAngle(c.fov_y_deg);
+  ren->ResetCameraClippingRange();
+
+  vtkNew<vtkRenderWindow> window;
+  window->SetSize(scene.width, scene.height);
+  window->SetMultiSamples(0);
+  window->AddRenderer(ren);
+
+  // The first frame includes window creation and each mapper's per-mesh set-up.
+  pb::Stopwatch first_clock;
+  window->Render();
+  const double first_ms = first_clock.ms();
+  std::vector<double> times;
+  for (int f = 0; f < frames; ++f) {
+    pb::Stopwatch frame_clock;
+    window->Render();
+    times.push_back(frame_clock.ms());
+  }
+  const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
+  const std::string image_path = data_dir + "/images/" + scene.name + "-" + renderer + ".png";
+  std::filesystem::create_directories(data_dir + "/images");
+  pr::write_png(image_path, rgb, scene.width, scene.height);
+  nlohmann::ordered_json line;
+  line["bench"] = "render";
+  line["scene"] = scene.name;
+  line["scene_kind"] = scene.kind;
+  line["renderer"] = renderer;
+  line["tets"] = scene.tet_count();
+  line["points"] = scene.point_count();
+  line["width"] = scene.width;
+  line["height"] = scene.height;
+  line["frames"] = frames;
+  line["ms_per_frame"] = pb::rounded(pb::median(times));
+  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
+  if (!reference.empty()) {
+    const pb::ImageError err = pb::compare_rgb8(rgb, reference);
+    line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
+    line["max_abs_error"] = err.max_abs;
+    line["bad_pixels"] = err.bad_pixels;
+  }
+  line["integrator"] = linear_integrator ? "vtkUnstructuredGridLinearRayIntegrator" : "default";
+  line["first_frame_ms"] = pb::rounded(first_ms, 1);
+  line["image"] = image_path;
+  return line;
+}
+
+int run(int argc, char** argv) {
+  const std::string name = pb::option(argc, argv, "scene", "");
+  const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
+  const std::string renderers = pb::option(argc, argv, "renderers", "vtk-raycast,vtk-zsweep");
+  const std::string integrator = pb::option(argc, argv, "integrator", "linear");
+  penumbra::require(!name.empty() && !data_dir.empty(), "pnb_bench_render_vtk: --scene NAME and --data-dir DIR are required");
+  penumbra::require(frames >= 1, "pnb_bench_render_vtk: --frames must be >= 1");
+  penumbra::require(integrator == "linear" || integrator == "default",
+                    "pnb_bench_render_vtk: --integrator '" + integrator + "', expected linear or default");
+
+  const pb::Scene scene = pb::load_scene(name, data_dir);
+  const std::string ref_path = pb::reference_path(scene, data_dir);
+  // Without a reference (only with --no-reference 1, for checking set-ups) errors are left out.
+  const bool no_reference = pb::option(argc, argv, "no-reference", "0") != "0";
+  std::vector<unsigned char> reference;
+  if (!no_reference) {
+    penumbra::require(std::filesystem::exists(ref_path), "pnb_bench_render_vtk: reference image '" + ref_path +
+                                                             "' is missing (pnb_bench_render_penumbra writes it)");
+    int w = 0, h = 0;
+    reference = pr::read_png_rgb(ref_path, w, h);
+    penumbra::require(w == scene.width && h == scene.height, "pnb_bench_render_vtk: reference has the wrong size");
+  }
+
+  const vtkSmartPointer<vtkUnstructuredGrid> grid = make_grid(scene);
+  std::stringstream list(renderers);
+  for (std::string renderer; std::getline(list, renderer, ',');)
+    std::cout << bench_mapper(scene, grid, renderer, integrator == "linear", frames, reference, data_dir).dump()
+              << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pnb_bench_render_vtk: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# bench/run.sh NAME -- builds what benchmark NAME needs and runs it, from the repository root.
+# Prints one JSON object per line on stdout (build logs and progress go to stderr) and keeps a
+# copy in build-bench/NAME.jsonl. Benchmarks:
+#   render   Penumbra's CPU ray caster vs VTK 9's unstructured-grid volume mappers (bench/README.md)
+# Environment: PNB_BENCH_BUILD_DIR (default build-bench), PNB_BENCH_FRAMES (timed frames, default 5,
+# at least 5 for reported numbers), PNB_BENCH_SCENES (default "holeblock-1m grid-aligned"),
+# PNB_BENCH_VTK_INTEGRATOR (linear, the default: the integrator matching Penumbra's optical model;
+# or default: the one each VTK mapper picks by itself).
+set -euo pipefail
+
+usage() {
+  echo "usage: bench/run.sh NAME" >&2
+  echo "  NAME: render  (Penumbra CPU ray caster vs vtkUnstructuredGridVolumeRayCastMapper and" >&2
+  echo "                 vtkUnstructuredGridVolumeZSweepMapper, 512x512, ~1M tets)" >&2
+  exit 2
+}
+
+[ $# -eq 1 ] || usage
+name=$1
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${PNB_BENCH_BUILD_DIR:-$root/build-bench}
+data=$build/data
+frames=${PNB_BENCH_FRAMES:-5}
+
+log() { echo "bench/run.sh: $*" >&2; }
+
+# Configures (once) and builds the given targets in the benchmark build directory. Tests,
+# examples and the VTK adaptor are not needed here.
+build_targets() {
+  local generator=()
+  if [ ! -f "$build/CMakeCache.txt" ] && command -v ninja >/dev/null; then generator=(-G Ninja); fi
+  cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DPNB_BUILD_BENCHMARKS=ON \
+    -DPNB_BUILD_TESTS=OFF -DPNB_BUILD_EXAMPLES=OFF -DPNB_ENABLE_VTK=OFF >&2
+  cmake --build "$build" --parallel "$(nproc)" --target "$@" >&2
+}
+
+# The graded non-convex holeblock of bench/scenes/holeblock.geo at h = 0.156 (about 1M tets;
+# shared/data/MESHES.md, Route A). Generated once, then cached in build-bench/data.
+holeblock_mesh() {
+  local out=$data/holeblock-1m.vtk
+  [ -f "$out" ] && return 0
+  command -v gmsh >/dev/null || { log "gmsh is missing: run scripts/setup.sh"; exit 1; }
+  mkdir -p "$data"
+  log "generating $out with gmsh (about a minute)"
+  gmsh -3 -nt "$(nproc)" -algo hxt -bin -format vtk -setnumber h 0.156 -setnumber ratio 20 \
+    -o "$data/holeblock-1m.tmp.vtk" "$root/bench/scenes/holeblock.geo" >"$data/gmsh-holeblock-1m.log" 2>&1 \
+    || { log "gmsh failed, see $data/gmsh-holeblock-1m.log"; exit 1; }
+  mv "$data/holeblock-1m.tmp.vtk" "$out"
+}
+
+bench_render() {
+  command -v xvfb-run >/dev/null || { log "xvfb-run is missing: run scripts/setup.sh"; exit 1; }
+  build_targets pnb_bench_render_penumbra pnb_bench_render_vtk
+  holeblock_mesh
+  local bin=$build/bench scene lines
+  for scene in ${PNB_BENCH_SCENES:-holeblock-1m grid-aligned}; do
+    log "render/$scene: penumbra-cpu (the reference image is computed once, then cached)"
+    lines=$("$bin/pnb_bench_render_penumbra" --scene "$scene" --data-dir "$data" --frames "$frames")
+    # Debian's VTK renders only through X11; Penumbra needs no display.
+    log "render/$scene: vtk-raycast, vtk-zsweep (under xvfb-run; the z-sweep takes about a minute per frame)"
+    lines+=$'\n'$(xvfb-run -a -s "-screen 0 1024x1024x24" "$bin/pnb_bench_render_vtk" --scene "$scene" \
+      --data-dir "$data" --frames "$frames" --integrator "${PNB_BENCH_VTK_INTEGRATOR:-linear}")
+    python3 "$root/bench/render/combine.py" <<<"$lines"
+  done
+}
+
+case "$name" in
+  render) bench_render | tee "$build/render.jsonl" ;;
+  *) echo "bench/run.sh: unknown benchmark '$name'" >&2; usage ;;
+esac

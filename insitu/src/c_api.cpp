@@ -1,0 +1,175 @@
+// insitu/src/c_api.cpp -- the C API: argument checks, conversion to views, and the guard that
+// keeps every exception out of the host program
+#include <new>
+#include <string>
+
+#include "config.h"
+#include "context.h"
+#include "penumbra/core/error.h"
+#include "penumbra/penumbra.h"
+
+struct pnb_context_s {
+  std::unique_ptr<penumbra::insitu::Context> context;
+  std::string last_error;
+};
+
+namespace {
+
+using penumbra::Error;
+using penumbra::ErrorCode;
+
+/// Last failure of a call without a usable context (pnb_create, or a NULL ctx); per thread so
+/// that concurrent contexts on different threads do not mix messages.
+thread_local std::string t_last_error;
+
+pnb_status record(pnb_context ctx, pnb_status status, const char* message) noexcept {
+  try {
+    (ctx ? ctx->last_error : t_last_error) = message;
+  } catch (...) {
+    // Out of memory while storing the message: the status still tells what happened.
+  }
+  return status;
+}
+
+template <class Body>
+pnb_status guarded(pnb_context ctx, Body&& body) noexcept {
+  try {
+    body();
+    return PNB_OK;
+  } catch (const Error& e) {
+    return record(ctx, static_cast<pnb_status>(e.code()), e.what());
+  } catch (const std::bad_alloc&) {
+    return record(ctx, PNB_OUT_OF_MEMORY, "out of memory");
+  } catch (const std::exception& e) {
+    return record(ctx, PNB_INTERNAL_ERROR, e.what());
+  } catch (...) {
+    return record(ctx, PNB_INTERNAL_ERROR, "unknown exception");
+  }
+}
+
+/// Every call but pnb_create needs a live context; a NULL one is reported per thread.
+pnb_status null_context(const char* call) noexcept {
+  return record(nullptr, PNB_INVALID_ARGUMENT, (std::string(call) + ": ctx is NULL").c_str());
+}
+
+penumbra::ScalarType scalar_type(pnb_type t) { return static_cast<penumbra::ScalarType>(t); }
+
+bool is_float(pnb_type t) { return t == PNB_FLOAT32 || t == PNB_FLOAT64; }
+bool is_index(pnb_type t) { return t == PNB_INT32 || t == PNB_INT64; }
+
+/// Checks what can be checked without reading the arrays, then wraps them in a MeshView.
+/// validate_mesh (inside preparation) checks their contents.
+penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
+  using penumbra::require;
+  const std::string who = "pnb_publish_mesh: ";
+  require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(d.point_type));
+  require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(d.index_type));
+  require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
+  require(d.points != nullptr, who + "points is NULL");
+  const std::int64_t item = 3 * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
+  const std::int64_t stride = d.point_stride_bytes == 0 ? item : d.point_stride_bytes;
+  require(stride >= item, who + "point_stride_bytes " + std::to_string(d.point_stride_bytes) +
+                              " is smaller than one xyz point (" + std::to_string(item) + " bytes)");
+  require(d.connectivity_count > 0, who + "connectivity_count must be > 0, got " + std::to_string(d.connectivity_count));
+  require(d.connectivity != nullptr, who + "connectivity is NULL");
+  require(d.cell_types != nullptr, who + "cell_types is NULL");
+  require(d.cell_types_count >= 1, who + "cell_types_count must be >= 1, got " + std::to_string(d.cell_types_count));
+
+  penumbra::MeshView v;
+  v.points = {static_cast<const std::byte*>(d.points), static_cast<std::size_t>(d.point_count), static_cast<std::ptrdiff_t>(stride)};
+  v.point_type = scalar_type(d.point_type);
+  v.connectivity = {d.connectivity, static_cast<std::size_t>(d.connectivity_count), scalar_type(d.index_type)};
+  v.cell_types = d.cell_types;
+  v.cell_type_count = static_cast<std::size_t>(d.cell_types_count);
+  v.topology_version = d.topology_version;
+  if (d.offsets) {
+    std::size_t cells = v.cell_type_count;
+    if (cells == 1) {
+      const int n = penumbra::cell_point_count(d.cell_types[0]);
+      require(n > 0, who + "unsupported cell type " + std::to_string(d.cell_types[0]) +
+                         " (expected 10 tetra, 12 hexahedron, 13 wedge or 14 pyramid)");
+      cells = v.connectivity.count / static_cast<std::size_t>(n);
+    }
+    v.offsets = {d.offsets, cells + 1, scalar_type(d.index_type)};
+  } else {
+    require(v.cell_type_count == 1, who + "offsets is NULL but cell_types_count is " + std::to_string(d.cell_types_count) +
+                                        " (offsets may be NULL only when every cell has one type: cell_types_count 1)");
+  }
+  return v;
+}
+
+penumbra::FieldView field_view(const pnb_field_desc& d) {
+  using penumbra::require;
+  const std::string who = "pnb_publish_field: ";
+  require(d.name != nullptr, who + "name is NULL");
+  penumbra::FieldView f;
+  f.name = d.name;
+  require(d.association == PNB_POINT_FIELD || d.association == PNB_CELL_FIELD,
+          who + "field '" + f.name + "': association must be PNB_POINT_FIELD or PNB_CELL_FIELD");
+  require(is_float(d.type), who + "field '" + f.name + "': type must be PNB_FLOAT32 or PNB_FLOAT64");
+  require(d.components >= 1, who + "field '" + f.name + "': components must be >= 1, got " + std::to_string(d.components));
+  require(d.count >= 0, who + "field '" + f.name + "': count must be >= 0, got " + std::to_string(d.count));
+  const std::int64_t item = d.components * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.type)));
+  f.association = d.association == PNB_POINT_FIELD ? penumbra::Association::point : penumbra::Association::cell;
+  f.type = scalar_type(d.type);
+  f.components = d.components;
+  f.values = {static_cast<const std::byte*>(d.values), static_cast<std::size_t>(d.count),
+              static_cast<std::ptrdiff_t>(d.stride_bytes == 0 ? item : d.stride_bytes)};
+  return f;
+}
+
+}  // namespace
+
+extern "C" {
+
+pnb_status pnb_create(const char* config, pnb_context* out) {
+  if (out) *out = nullptr;
+  return guarded(nullptr, [&] {
+    penumbra::require(out != nullptr, "pnb_create: out is NULL");
+    penumbra::require(config != nullptr, "pnb_create: config is NULL (expected a file path or JSON text)");
+    auto ctx = std::make_unique<pnb_context_s>();
+    ctx->context = std::make_unique<penumbra::insitu::Context>(penumbra::insitu::parse_config(config));
+    *out = ctx.release();
+  });
+}
+
+pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own) {
+  if (!ctx) return null_context("pnb_publish_mesh");
+  return guarded(ctx, [&] {
+    penumbra::require(mesh != nullptr, "pnb_publish_mesh: mesh is NULL");
+    penumbra::require(own == PNB_BORROW || own == PNB_COPY, "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
+    // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
+    ctx->context->publish_mesh(mesh_view(*mesh));
+  });
+}
+
+pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_ownership own) {
+  if (!ctx) return null_context("pnb_publish_field");
+  return guarded(ctx, [&] {
+    penumbra::require(field != nullptr, "pnb_publish_field: field is NULL");
+    penumbra::require(own == PNB_BORROW || own == PNB_COPY, "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
+    ctx->context->publish_field(field_view(*field), own == PNB_COPY);
+  });
+}
+
+pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle) {
+  if (!ctx) return null_context("pnb_execute");
+  return guarded(ctx, [&] { ctx->context->execute(time, cycle); });
+}
+
+pnb_status pnb_finalize(pnb_context ctx) {
+  if (!ctx) return null_context("pnb_finalize");
+  return guarded(ctx, [&] { ctx->context->finalize(); });
+}
+
+const char* pnb_last_error(pnb_context ctx) { return ctx ? ctx->last_error.c_str() : t_last_error.c_str(); }
+
+void pnb_destroy(pnb_context ctx) {
+  if (!ctx) return;
+  guarded(ctx, [&] {
+    if (!ctx->context->finalized()) ctx->context->finalize();
+  });
+  delete ctx;
+}
+
+}  // extern "C"

@@ -1,0 +1,233 @@
+// insitu/src/cinema_database.cpp -- data.csv reading, atomic rewriting, image naming
+#include "cinema_database.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "penumbra/core/error.h"
+
+namespace penumbra::insitu {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kCsvName = "data.csv";
+
+[[noreturn]] void io_fail(const std::string& what, const std::string& path, int err) {
+  throw Error(ErrorCode::io_error, "Cinema database: " + what + " '" + path + "': " + std::strerror(err));
+}
+
+std::string csv_quote(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+std::string row_key(const std::vector<std::string>& values) {
+  std::string k;
+  for (const auto& v : values) k += csv_quote(v) + ",";
+  return k;
+}
+
+/// Writes `text` to `path` durably: temp file in the same directory, fsync, rename, fsync dir.
+void write_file_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) io_fail("cannot create", tmp, errno);
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int e = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      io_fail("cannot write", tmp, e);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    const int e = errno;
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    io_fail("cannot flush", tmp, e);
+  }
+  ::close(fd);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    io_fail("cannot rename into place", path, e);
+  }
+  // The rename itself must reach the disk for the new data.csv to survive a machine crash.
+  const std::string dir = fs::path(path).parent_path().string();
+  const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+}  // namespace
+
+std::string safe_path_component(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+                    c == '_' || c == '.';
+    out += ok ? c : '_';
+  }
+  if (out.empty() || out == "." || out == "..") out = "_" + out;
+  return out;
+}
+
+std::vector<std::vector<std::string>> CinemaDatabase::parse_csv(const std::string& text, const std::string& source) {
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> row;
+  std::string cell;
+  bool quoted = false, row_started = false;
+  std::size_t line = 1;
+  auto fail = [&](const std::string& what) {
+    throw Error(ErrorCode::invalid_argument, "Cinema database: " + source + " line " + std::to_string(line) + ": " + what);
+  };
+  auto end_row = [&] {
+    row.push_back(cell);
+    cell.clear();
+    if (!rows.empty() && row.size() != rows.front().size())
+      fail("has " + std::to_string(row.size()) + " columns, the header has " + std::to_string(rows.front().size()));
+    rows.push_back(std::move(row));
+    row.clear();
+    row_started = false;
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        cell += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        if (c == '\n') ++line;
+        cell += c;
+      }
+      continue;
+    }
+    if (c == '"') {
+      if (!cell.empty()) fail("has a quote inside an unquoted value");
+      quoted = row_started = true;
+    } else if (c == ',') {
+      row.push_back(cell);
+      cell.clear();
+      row_started = true;
+    } else if (c == '\n') {
+      end_row();
+      ++line;
+    } else if (c != '\r') {
+      cell += c;
+      row_started = true;
+    }
+  }
+  if (quoted) fail("ends inside a quoted value");
+  if (row_started) end_row();
+  return rows;
+}
+
+CinemaDatabase::CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists)
+    : m_directory(std::move(directory)), m_parameters(std::move(parameters)) {
+  std::error_code ec;
+  const fs::path dir(m_directory);
+  const bool exists = fs::exists(dir, ec);
+  if (exists && !fs::is_directory(dir, ec))
+    throw Error(ErrorCode::io_error, "Cinema database: output directory '" + m_directory + "' exists and is not a directory");
+  const fs::path csv = dir / kCsvName;
+  if (exists && if_exists == IfExists::error && !fs::is_empty(dir, ec))
+    throw Error(ErrorCode::invalid_argument,
+                "Cinema database: output directory '" + m_directory +
+                    "' exists and is not empty; refusing to overwrite it (set output.if_exists to \"resume\" "
+                    "to append to its database, or choose another directory)");
+  if (!exists && !fs::create_directories(dir, ec))
+    io_fail("cannot create output directory", m_directory, ec.value());
+  if (exists && if_exists == IfExists::resume && fs::exists(csv, ec)) load_existing(csv.string());
+  write_csv();  // proves the directory writable now, not at the first rendered step
+}
+
+void CinemaDatabase::load_existing(const std::string& csv_path) {
+  std::ifstream in(csv_path, std::ios::binary);
+  if (!in) io_fail("cannot read", csv_path, errno);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const auto table = parse_csv(ss.str(), "'" + csv_path + "'");
+  std::vector<std::string> expected = m_parameters;
+  expected.push_back("FILE");
+  auto joined = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+    return s;
+  };
+  if (table.empty() || table.front() != expected)
+    throw Error(ErrorCode::invalid_argument,
+                "Cinema database: cannot resume '" + csv_path + "': its header is '" +
+                    (table.empty() ? std::string() : joined(table.front())) + "' but this config writes '" +
+                    joined(expected) + "' (use a new output directory for a different camera or parameter set)");
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    Row row{std::vector<std::string>(table[r].begin(), table[r].end() - 1), table[r].back()};
+    m_row_of_key[row_key(row.values)] = m_rows.size();
+    m_rows.push_back(std::move(row));
+  }
+}
+
+std::string CinemaDatabase::new_image_path(const std::string& subdir, const std::string& stem) {
+  const std::string sub = safe_path_component(subdir);
+  std::error_code ec;
+  const fs::path dir = fs::path(m_directory) / sub;
+  fs::create_directories(dir, ec);
+  if (ec) io_fail("cannot create image directory", dir.string(), ec.value());
+  const std::string base = safe_path_component(stem);
+  for (int n = 1;; ++n) {
+    std::string rel = sub + "/" + base;
+    if (n > 1) rel.append(1, '_').append(std::to_string(n));
+    rel += ".png";
+    if (m_reserved.count(rel) || fs::exists(fs::path(m_directory) / rel, ec)) continue;
+    m_reserved.insert(rel);
+    return rel;
+  }
+}
+
+void CinemaDatabase::commit(const std::vector<Row>& rows) {
+  for (const auto& row : rows) {
+    PNB_ASSERT(row.values.size() == m_parameters.size());
+    const std::string key = row_key(row.values);
+    auto it = m_row_of_key.find(key);
+    if (it != m_row_of_key.end()) {
+      m_rows[it->second] = row;
+    } else {
+      m_row_of_key[key] = m_rows.size();
+      m_rows.push_back(row);
+    }
+  }
+  write_csv();
+  m_reserved.clear();
+}
+
+std::string CinemaDatabase::path_of(const std::string& relative) const {
+  return (fs::path(m_directory) / relative).string();
+}
+
+void CinemaDatabase::write_csv() const {
+  std::string text;
+  for (const auto& p : m_parameters) text += csv_quote(p) + ",";
+  text += "FILE\n";
+  for (const auto& row : m_rows) {
+    for (const auto& v : row.values) text += csv_quote(v) + ",";
+    text += csv_quote(row.file) + "\n";
+  }
+  write_file_atomic(path_of(kCsvName), text);
+}
+
+}  // namespace penumbra::insitu

@@ -1,0 +1,79 @@
+// insitu/src/config.h -- the runtime's JSON configuration, parsed and checked
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "penumbra/core/field_view.h"
+#include "penumbra/core/vec3.h"
+#include "penumbra/render/transfer_function.h"
+
+namespace penumbra::insitu {
+
+/// What pnb_create does when the output directory already exists and is not empty.
+enum class IfExists { error, resume };
+
+/// Which renderer runs the steps. `automatic` picks the best available (today: cpu).
+enum class Backend { cpu, gpu, automatic };
+
+/// An explicit camera: eye looking at target.
+struct LookAtCamera {
+  std::string name;
+  Vec3d eye, target, up{0, 0, 1};
+  double fov_y_deg = 30.0;
+};
+
+/// Cinema orbit cameras: every (phi, theta) pair, in degrees (see render::Camera::orbit).
+struct OrbitCameras {
+  std::vector<double> phi;
+  std::vector<double> theta;
+  double fov_y_deg = 30.0;
+};
+
+/// How transfer-function x values are read.
+enum class XUnits { normalized, data };
+/// How opacity control values are read: extinction per world length unit, or per bounding-box
+/// diagonal of the mesh (a = 1 gives optical depth 1 across the whole diagonal).
+enum class OpacityUnit { world, diagonal };
+
+/// One rendered field.
+struct FieldConfig {
+  std::string name;  ///< matched against published field names, whatever their association
+  ComponentMode mode = ComponentMode::magnitude;
+  int component = 0;
+  std::optional<std::pair<double, double>> range;  ///< nullopt = "auto" (finite range per step)
+  XUnits x_units = XUnits::normalized;
+  OpacityUnit opacity_unit = OpacityUnit::diagonal;
+  render::TransferFunction transfer_function;  ///< x in x_units, opacity in opacity_unit
+};
+
+/// When a step renders: every `every_cycles` cycles and/or every `every_time` of simulation time.
+struct TriggerConfig {
+  std::int64_t every_cycles = 0;  ///< 0 = not used
+  double every_time = 0.0;        ///< 0 = not used
+};
+
+/// The whole configuration. See insitu/README.md for the JSON schema.
+struct Config {
+  std::string output_directory;
+  IfExists if_exists = IfExists::error;
+  int width = 256;
+  int height = 256;
+  float background[3] = {1.0f, 1.0f, 1.0f};
+  std::optional<OrbitCameras> orbit;
+  std::vector<LookAtCamera> look_at;
+  std::vector<FieldConfig> fields;
+  TriggerConfig trigger;
+  Backend backend = Backend::cpu;
+
+  /// True when `name` is rendered by at least one field entry.
+  bool uses_field(const std::string& name) const;
+};
+
+/// Parses `text_or_path`: JSON text when its first non-blank character is '{', else a file path.
+/// Throws Error(invalid_argument) naming the key path ("config: fields[0].range must be ...")
+/// for unknown keys, wrong types or values, and Error(io_error) when the file cannot be read.
+Config parse_config(const std::string& text_or_path);
+
+}  // namespace penumbra::insitu

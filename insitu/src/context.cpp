@@ -1,0 +1,277 @@
+// insitu/src/context.cpp -- per-step pipeline: fields -> scalars -> images -> database
+#include "context.h"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "penumbra/core/error.h"
+#include "penumbra/render/camera.h"
+#include "penumbra/render/cpu_ray_caster.h"
+#include "penumbra/render/image.h"
+#include "penumbra/render/tet_mesh.h"
+
+namespace penumbra::insitu {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<std::string> database_parameters(const Config& c) {
+  if (c.look_at.empty()) return {"time", "phi", "theta", "field"};
+  return {"time", "phi", "theta", "camera", "field"};
+}
+
+/// The `field` column per config entry: the field name, made unique with the component when
+/// one field is rendered several ways.
+std::vector<std::string> field_labels(const Config& c) {
+  std::vector<std::string> labels;
+  for (const auto& f : c.fields) {
+    int uses = 0;
+    for (const auto& g : c.fields) uses += g.name == f.name;
+    if (uses == 1) labels.push_back(f.name);
+    else if (f.mode == ComponentMode::magnitude) labels.push_back(f.name + "_magnitude");
+    else labels.push_back(f.name + "_c" + std::to_string(f.component));
+  }
+  return labels;
+}
+
+/// Transfer function of `f` in data units and extinction per world unit, for this step's scalars.
+render::TransferFunction resolve_transfer_function(const FieldConfig& f, const std::vector<float>& scalars,
+                                                   double diagonal) {
+  render::TransferFunction tf = f.transfer_function;
+  if (f.x_units == XUnits::normalized) {
+    double lo = 0, hi = 1;
+    if (f.range) {
+      lo = f.range->first;
+      hi = f.range->second;
+    } else {
+      const ValueRange r = finite_range(scalars);
+      lo = r.lo;
+      hi = r.hi;
+      // A constant (or all-NaN) field has lo == hi: widen the range symmetrically so the value
+      // sits at x = 0.5 instead of dividing by zero. Any half-width works; this one is finite.
+      if (!(hi > lo)) {
+        const double h = 0.5 * std::max(1.0, std::fabs(lo));
+        lo -= h;
+        hi += h;
+      }
+    }
+    for (auto& c : tf.colors) c.x = lo + c.x * (hi - lo);
+    for (auto& o : tf.opacities) o.x = lo + o.x * (hi - lo);
+  }
+  if (f.opacity_unit == OpacityUnit::diagonal && diagonal > 0)
+    for (auto& o : tf.opacities) o.a /= diagonal;
+  return tf;
+}
+
+}  // namespace
+
+std::string format_number(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+struct Context::CameraEntry {
+  render::Camera camera;
+  std::string phi, theta, name;  ///< database values
+  std::string stem;              ///< image file name stem without the cycle
+};
+
+struct Context::PreparedMesh {
+  std::shared_ptr<const render::TetMesh> tets;
+  std::unique_ptr<render::CpuRayCaster> caster;
+  std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
+  std::vector<std::uint8_t> cell_types;
+  MeshView view;  ///< over the owned copies (points from the prepared mesh)
+  std::vector<CameraEntry> cameras;
+};
+
+Context::Context(Config config)
+    : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
+  if (m_config.backend == Backend::gpu)
+    throw Error(ErrorCode::backend_unavailable,
+                "config: backend \"gpu\" is not available in this build (no GPU backend compiled in); "
+                "use \"cpu\" or \"auto\"");
+  m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
+                                                m_config.if_exists);
+}
+
+Context::~Context() = default;
+
+void Context::require_open(const char* call) const {
+  if (m_finalized)
+    throw Error(ErrorCode::invalid_operation, std::string(call) + ": the context was finalized; only pnb_destroy is allowed");
+}
+
+std::size_t Context::held_field_bytes() const {
+  std::size_t n = 0;
+  for (const auto& [name, f] : m_fields) n += f.owned.size();
+  return n;
+}
+
+void Context::publish_mesh(const MeshView& mesh) {
+  require_open("pnb_publish_mesh");
+  if (m_mesh && m_mesh->view.topology_version == mesh.topology_version) {
+    // Same topology: nothing to redo. Counts are compared because they cost nothing and catch
+    // a solver that changed its mesh but forgot to bump the version.
+    require(mesh.point_count() == m_mesh->view.point_count() && mesh.cell_count() == m_mesh->view.cell_count(),
+            "pnb_publish_mesh: topology_version " + std::to_string(mesh.topology_version) +
+                " is unchanged but the mesh now has " + std::to_string(mesh.point_count()) + " points and " +
+                std::to_string(mesh.cell_count()) + " cells (was " + std::to_string(m_mesh->view.point_count()) +
+                " and " + std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the mesh changes");
+    return;
+  }
+  auto p = std::make_unique<PreparedMesh>();
+  p->tets = std::make_shared<const render::TetMesh>(render::prepare_tet_mesh(mesh, "pnb_publish_mesh"));
+  p->caster = std::make_unique<render::CpuRayCaster>(p->tets);
+
+  const std::size_t isz = scalar_size(mesh.connectivity.type);
+  const auto* cb = static_cast<const std::byte*>(mesh.connectivity.data);
+  p->connectivity.assign(cb, cb + mesh.connectivity.count * isz);
+  if (mesh.offsets.count > 0) {
+    const auto* ob = static_cast<const std::byte*>(mesh.offsets.data);
+    p->offsets.assign(ob, ob + mesh.offsets.count * scalar_size(mesh.offsets.type));
+  }
+  p->cell_types.assign(mesh.cell_types, mesh.cell_types + mesh.cell_type_count);
+  p->view = mesh;
+  p->view.points = {reinterpret_cast<const std::byte*>(p->tets->points.data()), mesh.points.count, sizeof(Vec3d)};
+  p->view.point_type = ScalarType::float64;
+  p->view.connectivity.data = p->connectivity.data();
+  p->view.offsets.data = p->offsets.empty() ? nullptr : p->offsets.data();
+  p->view.cell_types = p->cell_types.data();
+
+  const Bounds& b = p->tets->bounds;
+  if (m_config.orbit)
+    for (double theta : m_config.orbit->theta)
+      for (double phi : m_config.orbit->phi) {
+        CameraEntry e{render::Camera::orbit(b, phi, theta, m_config.orbit->fov_y_deg, m_config.width, m_config.height),
+                      format_number(phi), format_number(theta), "orbit", ""};
+        e.stem = "phi" + e.phi + "_theta" + e.theta;
+        p->cameras.push_back(std::move(e));
+      }
+  for (const auto& c : m_config.look_at) {
+    // phi/theta of the viewing direction as seen from the target, so look_at rows sort
+    // sensibly beside orbit rows in Cinema viewers.
+    const Vec3d d = normalize(c.eye - c.target);
+    CameraEntry e{render::Camera::look_at(c.eye, c.target, c.up, c.fov_y_deg, m_config.width, m_config.height),
+                  format_number(std::round(std::atan2(d.y, d.x) * 180 / kPi * 100) / 100),
+                  format_number(std::round(std::asin(std::clamp(d.z, -1.0, 1.0)) * 180 / kPi * 100) / 100), c.name,
+                  c.name};
+    p->cameras.push_back(std::move(e));
+  }
+  m_mesh = std::move(p);
+  ++m_preparations;
+  // Fields were sized for the old mesh.
+  m_fields.clear();
+}
+
+void Context::publish_field(const FieldView& field, bool copy) {
+  require_open("pnb_publish_field");
+  if (!m_config.uses_field(field.name)) return;
+  const std::string who = "pnb_publish_field: field '" + field.name + "'";
+  if (!m_mesh)
+    throw Error(ErrorCode::invalid_operation, who + ": no mesh published yet; call pnb_publish_mesh first");
+  require(field.type == ScalarType::float32 || field.type == ScalarType::float64, who + ": type must be float32 or float64");
+  require(field.components >= 1, who + ": components must be >= 1, got " + std::to_string(field.components));
+  const std::size_t expected =
+      field.association == Association::point ? m_mesh->view.point_count() : m_mesh->view.cell_count();
+  require(field.values.count == expected,
+          who + " has " + std::to_string(field.values.count) + " values but the mesh has " + std::to_string(expected) +
+              (field.association == Association::point ? " points" : " cells"));
+  require(field.values.data != nullptr, who + ": values pointer is null");
+  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
+  require(field.values.stride_bytes >= static_cast<std::ptrdiff_t>(item),
+          who + ": stride_bytes " + std::to_string(field.values.stride_bytes) + " is smaller than one item (" +
+              std::to_string(item) + " bytes)");
+  for (const auto& f : m_config.fields)
+    require(f.name != field.name || f.mode == ComponentMode::magnitude || f.component < field.components,
+            who + " has " + std::to_string(field.components) + " components but the config renders component " +
+                std::to_string(f.component));
+  HeldField held;
+  held.view = field;
+  if (copy) {
+    held.owned.resize(item * field.values.count);
+    for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&held.owned[i * item], field.values.at(i), item);
+    held.view.values = {held.owned.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
+  }
+  m_fields[field.name] = std::move(held);
+}
+
+void Context::drop_borrowed_fields() {
+  for (auto it = m_fields.begin(); it != m_fields.end();)
+    it = it->second.owned.empty() ? m_fields.erase(it) : std::next(it);
+}
+
+void Context::render_field(std::size_t index, double time, std::int64_t cycle, std::vector<CinemaDatabase::Row>& rows,
+                           double& render_ms) {
+  const FieldConfig& f = m_config.fields[index];
+  auto it = m_fields.find(f.name);
+  if (it == m_fields.end())
+    throw Error(ErrorCode::invalid_operation, "pnb_execute: field '" + f.name + "' was not published for cycle " +
+                                                  std::to_string(cycle) + " (call pnb_publish_field before pnb_execute)");
+  // A held view stays valid: borrowed views are dropped after every execute, copied ones own their data.
+  const std::vector<float> scalars = point_scalars(m_mesh->view, it->second.view, f.mode, f.component);
+  const render::TransferFunction tf = resolve_transfer_function(f, scalars, m_mesh->tets->bounds.diagonal());
+  const bool with_camera_column = !m_config.look_at.empty();
+  char cycle_text[32];
+  std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
+  for (const CameraEntry& cam : m_mesh->cameras) {
+    const auto t0 = Clock::now();
+    const render::Image image = m_mesh->caster->render(scalars, tf, cam.camera);
+    render_ms += ms_since(t0);
+    const std::string rel = m_database->new_image_path(m_field_labels[index], cycle_text + cam.stem);
+    render::write_png(m_database->path_of(rel), render::to_rgb8(image, m_config.background), image.width, image.height);
+    CinemaDatabase::Row row;
+    row.values = {format_number(time), cam.phi, cam.theta};
+    if (with_camera_column) row.values.push_back(cam.name);
+    row.values.push_back(m_field_labels[index]);
+    row.file = rel;
+    rows.push_back(std::move(row));
+  }
+}
+
+bool Context::execute(double time, std::int64_t cycle) {
+  require_open("pnb_execute");
+  if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
+  require(std::isfinite(time), "pnb_execute: time must be finite");
+  struct DropBorrowed {
+    Context* c;
+    ~DropBorrowed() { c->drop_borrowed_fields(); }
+  } drop{this};
+  if (!m_trigger.fires(time, cycle)) return false;
+
+  const auto t0 = Clock::now();
+  std::vector<CinemaDatabase::Row> rows;
+  double render_ms = 0;
+  std::string failures;
+  ErrorCode first_code = ErrorCode::ok;
+  for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
+    try {
+      render_field(i, time, cycle, rows, render_ms);
+    } catch (const Error& e) {
+      // One field failing must not cost the others their images.
+      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
+      if (first_code == ErrorCode::ok) first_code = e.code();
+    }
+  }
+  // Only images that were completely written are listed.
+  if (!rows.empty()) m_database->commit(rows);
+  m_last_step = {cycle, static_cast<int>(rows.size()), render_ms, ms_since(t0)};
+  if (first_code != ErrorCode::ok) throw Error(first_code, failures);
+  return true;
+}
+
+void Context::finalize() {
+  // Every step is committed when execute() returns, so there is nothing left to flush.
+  m_finalized = true;
+  m_fields.clear();
+}
+
+}  // namespace penumbra::insitu

@@ -1,0 +1,98 @@
+// insitu/src/context.h -- the in-situ runtime behind the C API
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cinema_database.h"
+#include "config.h"
+#include "penumbra/core/field_view.h"
+#include "penumbra/core/mesh_view.h"
+#include "trigger.h"
+
+namespace penumbra::render {
+struct TetMesh;
+class CpuRayCaster;
+}  // namespace penumbra::render
+
+namespace penumbra::insitu {
+
+/// What the last rendering step did, for diagnostics and examples.
+struct StepStats {
+  std::int64_t cycle = 0;
+  int images = 0;
+  double render_ms = 0;  ///< ray casting only
+  double total_ms = 0;   ///< field conversion, rendering, PNG encoding and database commit
+};
+
+/// One solver's in-situ pipeline: holds the prepared mesh, the fields published since the last
+/// step, the trigger and the Cinema database. Not thread-safe. Every method throws
+/// penumbra::Error on bad input or failed I/O; the C API turns that into a status.
+class Context {
+public:
+  /// Opens the output database (see CinemaDatabase) and checks the backend.
+  explicit Context(Config config);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  /// Prepares `mesh` for rendering (validated, split into tets, adjacency, ray caster) and keeps
+  /// an owned copy of its topology for cell-to-point averaging; `mesh` may be freed afterwards.
+  /// When a mesh with the same topology_version is already prepared this returns at once (only
+  /// its point and cell counts are compared).
+  void publish_mesh(const MeshView& mesh);
+
+  /// Hands in a field for the next execute(). Fields the config does not render are ignored:
+  /// neither checked nor copied. Borrowed fields (copy = false) are read during the next
+  /// execute() and forgotten after it; copied fields are copied now and kept until replaced or
+  /// until the topology changes.
+  void publish_field(const FieldView& field, bool copy);
+
+  /// Renders every configured field from every camera if the trigger fires, writes the images
+  /// and commits them to the database. Returns whether the step rendered. A field that cannot
+  /// be rendered (e.g. not published) is skipped, the others are still written, and then an
+  /// Error naming every failure is thrown.
+  bool execute(double time, std::int64_t cycle);
+
+  /// Ends the run; later calls other than destruction throw Error(invalid_operation).
+  void finalize();
+  bool finalized() const { return m_finalized; }
+
+  const Config& config() const { return m_config; }
+  const StepStats& last_step() const { return m_last_step; }
+  /// Number of times a mesh was actually prepared (republishing an unchanged topology does not count).
+  std::size_t mesh_preparations() const { return m_preparations; }
+  /// Fields currently held, and the bytes of field values copied into the context.
+  std::size_t held_field_count() const { return m_fields.size(); }
+  std::size_t held_field_bytes() const;
+
+private:
+  struct PreparedMesh;
+  struct HeldField {
+    FieldView view;
+    std::vector<std::byte> owned;  ///< packed copy when published with copy = true
+  };
+  struct CameraEntry;
+
+  void require_open(const char* call) const;
+  void render_field(std::size_t index, double time, std::int64_t cycle, std::vector<CinemaDatabase::Row>& rows,
+                    double& render_ms);
+  void drop_borrowed_fields();
+
+  Config m_config;
+  Trigger m_trigger;
+  std::unique_ptr<CinemaDatabase> m_database;
+  std::unique_ptr<PreparedMesh> m_mesh;
+  std::map<std::string, HeldField> m_fields;
+  std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry
+  StepStats m_last_step;
+  std::size_t m_preparations = 0;
+  bool m_finalized = false;
+};
+
+/// Formats a number for data.csv: shortest text that reads back to the same double.
+std::string format_number(double v);
+
+}  // namespace penumbra::insitu

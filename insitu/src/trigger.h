@@ -1,0 +1,44 @@
+// insitu/src/trigger.h -- decides which execute() calls render
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <optional>
+
+#include "config.h"
+
+namespace penumbra::insitu {
+
+/// Decides whether a step renders. Two independent rules, combined with "or":
+/// - every_cycles = N: the step renders when cycle % N == 0 (cycle 0, N, 2N, ...). Depends on the
+///   cycle alone, so a restarted run renders the same cycles as an uninterrupted one.
+/// - every_time = T: the step renders when its time has entered a new interval [kT, (k+1)T)
+///   since the last step that rendered by this rule, and on the first step seen. Solvers' time
+///   steps rarely land on multiples of T; this renders the first step at or after each multiple.
+///   A relative tolerance of 1e-9 keeps t = 0.3 in interval 3 for T = 0.1 despite rounding.
+class Trigger {
+public:
+  explicit Trigger(const TriggerConfig& config) : m_config(config) {}
+
+  /// True when the step (time, cycle) renders; records it for the time rule.
+  bool fires(double time, std::int64_t cycle) {
+    bool fire = false;
+    if (m_config.every_cycles > 0) {
+      const std::int64_t n = m_config.every_cycles;
+      fire = ((cycle % n) + n) % n == 0;
+    }
+    if (m_config.every_time > 0) {
+      const double k = std::floor(time / m_config.every_time + 1e-9);
+      if (!m_last_interval || k > *m_last_interval) {
+        m_last_interval = k;
+        fire = true;
+      }
+    }
+    return fire;
+  }
+
+private:
+  TriggerConfig m_config;
+  std::optional<double> m_last_interval;
+};
+
+}  // namespace penumbra::insitu

@@ -1,0 +1,261 @@
+// tests/unit/insitu/context_test.cpp -- the per-step pipeline through the C++ Context
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "cinema_database.h"
+#include "config.h"
+#include "context.h"
+#include "fixtures/meshes.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/image.h"
+#include "test_util.h"
+
+namespace penumbra::insitu {
+namespace {
+
+using fixtures::BlockCells;
+using testing::TempDir;
+
+struct Scene {
+  fixtures::OwnedMesh mesh = fixtures::block(BlockCells::tets, 4, 4, 4, {0, 0, 0}, {1, 1, 1});
+  std::vector<double> blob = fixtures::sample(mesh, [](double x, double y, double z) {
+    return std::exp(-8 * ((x - .5) * (x - .5) + (y - .5) * (y - .5) + (z - .5) * (z - .5)));
+  });
+};
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& dir) {
+  return CinemaDatabase::parse_csv(testing::read_text(dir + "/data.csv"), "data.csv");
+}
+
+std::vector<unsigned char> image(const std::string& dir, const std::string& rel, int& w, int& h) {
+  return render::read_png_rgb(dir + "/" + rel, w, h);
+}
+
+TEST(Context, RendersEveryFieldAndCameraIntoTheDatabase) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  EXPECT_TRUE(ctx.execute(0.25, 7));
+  EXPECT_EQ(ctx.last_step().images, 2);
+  const auto rows = csv_rows(tmp / "db");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"time", "phi", "theta", "field", "FILE"}));
+  EXPECT_EQ(rows[1], (std::vector<std::string>{"0.25", "0", "30", "T", "T/c000007_phi0_theta30.png"}));
+  EXPECT_EQ(rows[2], (std::vector<std::string>{"0.25", "90", "30", "T", "T/c000007_phi90_theta30.png"}));
+  int w = 0, h = 0;
+  const auto rgb = image(tmp / "db", rows[1][4], w, h);
+  EXPECT_EQ(w, 24);
+  EXPECT_EQ(h, 20);
+  // The block fills the middle of the view: its centre pixel is not the white background.
+  const unsigned char* centre = &rgb[(10 * 24 + 12) * 3];
+  EXPECT_LT(int(centre[0]) + centre[1] + centre[2], 3 * 250);
+}
+
+TEST(Context, UnchangedTopologyVersionSkipsPreparation) {
+  TempDir tmp;
+  Scene s;
+  fixtures::OwnedMesh big = fixtures::block(BlockCells::hexes, 24, 24, 24, {0, 0, 0}, {1, 1, 1});
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  const auto t0 = std::chrono::steady_clock::now();
+  ctx.publish_mesh(big.view());
+  const auto t1 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 10; ++i) ctx.publish_mesh(big.view());
+  const auto t2 = std::chrono::steady_clock::now();
+  EXPECT_EQ(ctx.mesh_preparations(), 1u);
+  // Ten republishes must cost less than one preparation (they are O(1); preparing 13824 hexes
+  // takes milliseconds), a loose bound that timing noise cannot break.
+  EXPECT_LT((t2 - t1).count(), (t1 - t0).count());
+  big.topology_version = 2;
+  ctx.publish_mesh(big.view());
+  EXPECT_EQ(ctx.mesh_preparations(), 2u);
+  // Same version with different counts is the solver's bug, reported rather than ignored.
+  s.mesh.topology_version = 2;
+  EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
+}
+
+TEST(Context, UnconfiguredFieldsAreNeitherCopiedNorChecked) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  ctx.publish_mesh(s.mesh.view());
+  std::vector<double> wrong_size(3, 1.0);
+  ctx.publish_field(fixtures::point_field("pressure", wrong_size), true);
+  EXPECT_EQ(ctx.held_field_count(), 0u);
+  EXPECT_EQ(ctx.held_field_bytes(), 0u);
+  ctx.publish_field(fixtures::point_field("T", s.blob), true);
+  EXPECT_EQ(ctx.held_field_count(), 1u);
+  EXPECT_EQ(ctx.held_field_bytes(), s.blob.size() * sizeof(double));
+}
+
+TEST(Context, CopiedFieldsPersistBorrowedOnesAreForgottenAfterExecute) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  ctx.execute(0, 0);
+  EXPECT_EQ(ctx.held_field_count(), 0u);
+  EXPECT_THROW(ctx.execute(1, 1), Error);  // borrowed field not republished
+  {
+    std::vector<double> copy = s.blob;
+    ctx.publish_field(fixtures::point_field("T", copy), true);
+    std::fill(copy.begin(), copy.end(), -1.0);  // the context holds its own copy
+  }
+  EXPECT_TRUE(ctx.execute(2, 2));
+  EXPECT_TRUE(ctx.execute(3, 3));
+  EXPECT_EQ(csv_rows(tmp / "db").size(), 1u + 2 * 3);
+}
+
+TEST(Context, FailedFieldIsSkippedOthersAreWrittenAndLaterStepsWork) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}, {"name": "U"}])")));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  try {
+    ctx.execute(0, 0);
+    FAIL() << "missing field U not reported";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_operation);
+    EXPECT_NE(std::string(e.what()).find("field 'U' was not published for cycle 0"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(csv_rows(tmp / "db").size(), 1u + 2);  // T's two images are listed
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  ctx.publish_field(fixtures::point_field("U", s.blob), false);
+  EXPECT_TRUE(ctx.execute(1, 1));
+  EXPECT_EQ(csv_rows(tmp / "db").size(), 1u + 2 + 4);
+}
+
+TEST(Context, TriggerSkipsStepsWithoutTouchingTheDatabase) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])", R"(, "trigger": {"every_cycles": 3})")));
+  ctx.publish_mesh(s.mesh.view());
+  int rendered = 0;
+  for (int c = 0; c < 7; ++c) {
+    ctx.publish_field(fixtures::point_field("T", s.blob), false);
+    rendered += ctx.execute(c * 0.1, c);
+  }
+  EXPECT_EQ(rendered, 3);  // cycles 0, 3, 6
+  EXPECT_EQ(csv_rows(tmp / "db").size(), 1u + 3 * 2);
+}
+
+/// Renders `values` once with one camera and returns the centre pixel.
+std::array<int, 3> centre_pixel(const std::vector<double>& values, const std::string& field_json) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(R"({"output": {"directory": ")" + (tmp / "db") + R"("}, "image": {"width": 9, "height": 9},
+      "cameras": {"phi": [30], "theta": [20]}, "fields": [)" + field_json + "]}"));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", values), false);
+  ctx.execute(0, 0);
+  int w, h;
+  const auto rgb = image(tmp / "db", csv_rows(tmp / "db")[1][4], w, h);
+  const unsigned char* p = &rgb[(4 * 9 + 4) * 3];
+  return {p[0], p[1], p[2]};
+}
+
+TEST(Context, ConstantFieldWithAutoRangeUsesTheMiddleOfTheTransferFunction) {
+  Scene s;
+  // Colour red below 0.5, blue above; opacity only near x = 0.5. A constant field must show the
+  // colour at x = 0.5 (purple) rather than fail or produce NaN from lo == hi.
+  const std::string tf = R"({"name": "T", "transfer_function": {"colors": [[0, 1, 0, 0], [0.5, 0.5, 0, 0.5], [1, 0, 0, 1]],
+                                                                 "opacities": [[0.4, 0], [0.5, 50], [0.6, 0]]}})";
+  const auto p = centre_pixel(std::vector<double>(s.mesh.point_count(), 7.0), tf);
+  EXPECT_GT(p[0], 50);
+  EXPECT_LT(p[1], 40);
+  EXPECT_GT(p[2], 50);
+  EXPECT_NEAR(p[0], p[2], 8);  // 8/255: PNG rounding plus the float ray integration
+}
+
+TEST(Context, AllNanFieldRendersAsBackground) {
+  Scene s;
+  const auto p = centre_pixel(std::vector<double>(s.mesh.point_count(), std::nan("")), R"({"name": "T"})");
+  EXPECT_EQ(p, (std::array<int, 3>{255, 255, 255}));
+}
+
+TEST(Context, RangeAndDataUnitsSelectTheColour) {
+  Scene s;
+  // Field 2 everywhere; fixed range [0, 4] puts it at x = 0.5; data units read x = 2 directly.
+  const std::vector<double> two(s.mesh.point_count(), 2.0);
+  const auto a = centre_pixel(two, R"({"name": "T", "range": [0, 4], "transfer_function": {
+      "colors": [[0, 1, 0, 0], [0.5, 0, 1, 0], [1, 0, 0, 1]], "opacities": [[0, 40]]}})");
+  EXPECT_GT(a[1], 200);
+  const auto b = centre_pixel(two, R"({"name": "T", "transfer_function": {"x": "data",
+      "colors": [[0, 1, 0, 0], [2, 0, 0, 1]], "opacities": [[0, 40]]}})");
+  EXPECT_GT(b[2], 200);
+  EXPECT_LT(b[0], 30);
+}
+
+TEST(Context, ExecuteBeforeMeshAndAfterFinalizeAreInvalidOperations) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  try {
+    ctx.execute(0, 0);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_operation);
+  }
+  EXPECT_THROW(ctx.publish_field(fixtures::point_field("T", s.blob), false), Error);
+  ctx.finalize();
+  EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
+}
+
+TEST(Context, GpuBackendIsReportedUnavailableAutoFallsBackToCpu) {
+  TempDir tmp;
+  try {
+    Context ctx(parse_config(testing::small_config(tmp / "a", R"([{"name": "T"}])", R"(, "backend": "gpu")")));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::backend_unavailable);
+    EXPECT_NE(std::string(e.what()).find("backend \"gpu\" is not available"), std::string::npos);
+  }
+  EXPECT_NO_THROW(Context(parse_config(testing::small_config(tmp / "b", R"([{"name": "T"}])", R"(, "backend": "auto")"))));
+}
+
+TEST(Context, LookAtCamerasAddACameraColumn) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(R"({"output": {"directory": ")" + (tmp / "db") + R"("}, "image": {"width": 8, "height": 8},
+      "cameras": {"phi": [0], "theta": [0], "look_at": [{"name": "side", "eye": [0.5, -3, 0.5], "target": [0.5, 0.5, 0.5]}]},
+      "fields": [{"name": "T"}]})"));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  ctx.execute(0, 0);
+  const auto rows = csv_rows(tmp / "db");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"time", "phi", "theta", "camera", "field", "FILE"}));
+  EXPECT_EQ(rows[1][3], "orbit");
+  EXPECT_EQ(rows[2], (std::vector<std::string>{"0", "-90", "0", "side", "T", "T/c000000_side.png"}));
+}
+
+TEST(Context, CellFieldsAndVectorComponentsAreRendered) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "v", "component": 1}, {"name": "v"}])")));
+  ctx.publish_mesh(s.mesh.view());
+  std::vector<float> v(3 * s.mesh.cell_count(), 0.5f);
+  FieldView f;
+  f.name = "v";
+  f.association = Association::cell;
+  f.type = ScalarType::float32;
+  f.components = 3;
+  f.values = {reinterpret_cast<const std::byte*>(v.data()), s.mesh.cell_count(), 3 * sizeof(float)};
+  ctx.publish_field(f, false);
+  EXPECT_TRUE(ctx.execute(0, 0));
+  const auto rows = csv_rows(tmp / "db");
+  ASSERT_EQ(rows.size(), 5u);
+  EXPECT_EQ(rows[1][3], "v_c1");
+  EXPECT_EQ(rows[3][3], "v_magnitude");
+  f.components = 1;
+  f.values.stride_bytes = sizeof(float);
+  EXPECT_THROW(ctx.publish_field(f, false), Error);  // config renders component 1
+}
+
+}  // namespace
+}  // namespace penumbra::insitu

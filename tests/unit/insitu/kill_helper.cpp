@@ -1,0 +1,43 @@
+// tests/unit/insitu/kill_helper.cpp -- a "solver" that renders steps until it is killed.
+// Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "fixtures/meshes.h"
+#include "penumbra/penumbra.h"
+
+int main(int argc, char** argv) {
+  if (argc != 5) return 2;
+  const std::string config = R"({"output": {"directory": ")" + std::string(argv[1]) + R"(", "if_exists": ")" +
+                             argv[4] + R"("}, "image": {"width": 32, "height": 32},
+      "cameras": {"phi": [0, 120, 240], "theta": [20]}, "fields": [{"name": "T"}, {"name": "T2"}]})";
+  pnb_context ctx = nullptr;
+  if (pnb_create(config.c_str(), &ctx) != PNB_OK) {
+    std::fprintf(stderr, "%s\n", pnb_last_error(nullptr));
+    return 1;
+  }
+  auto mesh = penumbra::fixtures::block(penumbra::fixtures::BlockCells::tets, 6, 6, 6, {0, 0, 0}, {1, 1, 1});
+  pnb_mesh_desc m{mesh.xyz.data(), static_cast<int64_t>(mesh.point_count()), 0, PNB_FLOAT64,
+                  mesh.connectivity.data(), static_cast<int64_t>(mesh.connectivity.size()), mesh.offsets.data(),
+                  PNB_INT64, mesh.types.data(), static_cast<int64_t>(mesh.types.size()), 1};
+  if (pnb_publish_mesh(ctx, &m, PNB_BORROW) != PNB_OK) return 1;
+  const long first = std::atol(argv[2]), steps = std::atol(argv[3]);
+  for (long c = first; c < first + steps; ++c) {
+    const double t = 0.01 * static_cast<double>(c);
+    const auto values = penumbra::fixtures::sample(mesh, [t](double x, double y, double z) {
+      return std::sin(6 * x + t) * std::cos(4 * y) + z;
+    });
+    pnb_field_desc f{"T", PNB_POINT_FIELD, values.data(), static_cast<int64_t>(values.size()), 1, 0, PNB_FLOAT64};
+    pnb_field_desc f2 = f;
+    f2.name = "T2";
+    if (pnb_publish_field(ctx, &f, PNB_BORROW) != PNB_OK || pnb_publish_field(ctx, &f2, PNB_BORROW) != PNB_OK ||
+        pnb_execute(ctx, t, c) != PNB_OK) {
+      std::fprintf(stderr, "%s\n", pnb_last_error(ctx));
+      return 1;
+    }
+  }
+  pnb_destroy(ctx);
+  return 0;
+}

@@ -1,0 +1,99 @@
+// tests/unit/insitu/kill_resume_test.cpp -- a database left by a SIGKILLed solver is valid and resumable
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <set>
+#include <thread>
+
+#include "cinema_database.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/image.h"
+#include "test_util.h"
+
+extern char** environ;
+
+namespace penumbra::insitu {
+namespace {
+
+using testing::TempDir;
+
+/// Starts the helper solver; returns its pid.
+pid_t spawn_solver(const std::string& dir, long first, long steps, const char* if_exists) {
+  const std::string f = std::to_string(first), s = std::to_string(steps);
+  const char* argv[] = {PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists, nullptr};
+  pid_t pid = -1;
+  if (posix_spawn(&pid, PNB_KILL_HELPER, nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
+  return pid;
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return status;
+}
+
+std::size_t listed_rows(const std::string& dir) {
+  // data.csv is replaced by rename, so a read sees either the old or the new complete file.
+  const auto table = CinemaDatabase::parse_csv(testing::read_text(dir + "/data.csv"), "data.csv");
+  return table.empty() ? 0 : table.size() - 1;  // empty: not created yet
+}
+
+/// Every row's FILE exists and decodes as a 32x32 PNG; returns the rows (header first).
+std::vector<std::vector<std::string>> check_valid(const std::string& dir) {
+  const auto table = CinemaDatabase::parse_csv(testing::read_text(dir + "/data.csv"), "data.csv");
+  EXPECT_FALSE(table.empty());
+  EXPECT_EQ(table.at(0), (std::vector<std::string>{"time", "phi", "theta", "field", "FILE"}));
+  std::set<std::vector<std::string>> keys;
+  for (std::size_t r = 1; r < table.size(); ++r) {
+    int w = 0, h = 0;
+    EXPECT_NO_THROW(render::read_png_rgb(dir + "/" + table[r].back(), w, h)) << table[r].back();
+    EXPECT_EQ(w, 32);
+    EXPECT_EQ(h, 32);
+    EXPECT_TRUE(keys.insert({table[r].begin(), table[r].end() - 1}).second) << "duplicate parameters in row " << r;
+  }
+  return table;
+}
+
+TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
+  TempDir tmp;
+  // Kill at several points of a step: right after a commit is seen and some time into the next.
+  for (int round = 0; round < 3; ++round) {
+    const std::string dir = tmp / ("db" + std::to_string(round));
+    const pid_t pid = spawn_solver(dir, 0, 100000, "error");
+    ASSERT_GT(pid, 0);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    const std::size_t wanted = 6 * static_cast<std::size_t>(round + 1);  // 6 images per step
+    while (listed_rows(dir) < wanted && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    std::this_thread::sleep_for(std::chrono::microseconds(700 * round));
+    kill(pid, SIGKILL);
+    const int status = wait_exit(pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the solver ended before it was killed";
+    const auto table = check_valid(dir);
+    ASSERT_GE(table.size() - 1, wanted);
+    EXPECT_EQ((table.size() - 1) % 6, 0u) << "a step was listed partially";
+
+    // Resume: the same directory with if_exists "resume" appends later cycles.
+    const long next = static_cast<long>((table.size() - 1) / 6);
+    ASSERT_EQ(wait_exit(spawn_solver(dir, next, 2, "resume")), 0);
+    const auto resumed = check_valid(dir);
+    ASSERT_EQ(resumed.size(), table.size() + 12);
+    for (std::size_t r = 0; r < table.size(); ++r) EXPECT_EQ(resumed[r], table[r]) << "row " << r << " changed";
+  }
+}
+
+TEST(KillSafety, ErrorModeRefusesTheLeftDatabase) {
+  TempDir tmp;
+  const std::string dir = tmp / "db";
+  ASSERT_EQ(wait_exit(spawn_solver(dir, 0, 1, "error")), 0);
+  const std::string before = testing::read_text(dir + "/data.csv");
+  EXPECT_NE(wait_exit(spawn_solver(dir, 1, 1, "error")), 0);
+  EXPECT_EQ(testing::read_text(dir + "/data.csv"), before);
+}
+
+}  // namespace
+}  // namespace penumbra::insitu

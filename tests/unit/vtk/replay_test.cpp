@@ -1,0 +1,126 @@
+// tests/unit/vtk/replay_test.cpp -- penumbra-replay end to end: files -> C API -> Cinema database
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "replay.h"
+#include "vtk_test_util.h"
+
+namespace penumbra {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int rc = -1;
+  std::string out, err;
+};
+
+Result replay_run(const std::vector<std::string>& args) {
+  std::ostringstream out, err;
+  Result r;
+  r.rc = replay::run(args, out, err);
+  r.out = out.str();
+  r.err = err.str();
+  return r;
+}
+
+/// A small config (64x64, one orbit camera) rendering `field` into `dir`.
+std::string config(const fs::path& dir, const std::string& field) {
+  return R"({"output":{"directory":")" + dir.string() + R"("},"image":{"width":64,"height":64},)" +
+         R"("cameras":{"phi":[30],"theta":[20]},"fields":[{"name":")" + field + R"("}]})";
+}
+
+std::vector<std::string> read_lines(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);)
+    if (!l.empty()) lines.push_back(l);
+  return lines;
+}
+
+std::size_t png_count(const fs::path& dir) {
+  std::size_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) n += e.path().extension() == ".png";
+  return n;
+}
+
+/// Replays `input` rendering `field` and checks the database has `rows` images.
+void expect_database(const std::string& input, const std::string& field, std::size_t rows,
+                     const std::vector<std::string>& extra = {}) {
+  SCOPED_TRACE(input);
+  test::TempDir tmp("replay");
+  const fs::path db = tmp.path() / "db";
+  std::vector<std::string> args{config(db, field), (test::data_dir() / input).string(), "--quiet"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const Result r = replay_run(args);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;
+  const auto lines = read_lines(db / "data.csv");
+  ASSERT_EQ(lines.size(), rows + 1) << "header + one row per image";
+  EXPECT_NE(lines[0].rfind(",FILE"), std::string::npos) << lines[0];
+  EXPECT_EQ(png_count(db), rows);
+}
+
+TEST(Replay, MugExodusAllTwentyOneSteps) {
+  test::TempDir tmp("mug");
+  const fs::path db = tmp.path() / "db";
+  const Result r = replay_run({config(db, "diffused"), (test::data_dir() / "mug.e").string()});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("21 step(s) executed, mesh published 1 time(s), 0 failure(s)"), std::string::npos) << r.out;
+  const auto lines = read_lines(db / "data.csv");
+  ASSERT_EQ(lines.size(), 22u);
+  EXPECT_EQ(png_count(db), 21u);
+  EXPECT_NE(lines.back().find("2"), std::string::npos) << "last row carries t = 2: " << lines.back();
+}
+
+TEST(Replay, StepRangeSelectsSteps) { expect_database("mug.e", "convected", 3, {"--steps", "5:8"}); }
+TEST(Replay, DiskOutRefExodus) { expect_database("disk_out_ref.ex2", "Temp", 1); }
+TEST(Replay, CanVtuCellField) { expect_database("can.vtu", "EQPS", 1); }
+TEST(Replay, PostLegacyVtk) { expect_database("post.vtk", "Pressure", 1); }
+TEST(Replay, MfemVtkSeries) {
+  expect_database("generated/mfem_ex16_holeblock10k/mfem_ex16_holeblock10k.vtk.series", "temperature", 11);
+}
+
+// mesh_fs8.exo has no result variables. The reader still provides each cell's element block id
+// (ObjectId), so a config can render the blocks; a config naming a field the file lacks is
+// refused before any database is created, listing what is available.
+TEST(Replay, MeshOnlyExodusRendersBlockIdsAndRefusesMissingFields) {
+  expect_database("mesh_fs8.exo", "ObjectId", 1);
+  test::TempDir tmp("fs8");
+  const fs::path db = tmp.path() / "db";
+  const Result r = replay_run({config(db, "temperature"), (test::data_dir() / "mesh_fs8.exo").string()});
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("'temperature'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("available: ObjectId"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(db));
+}
+
+TEST(Replay, SurfaceMeshIsRefused) {
+  test::TempDir tmp("blow");
+  const Result r = replay_run({config(tmp.path() / "db", "thickness0"), (test::data_dir() / "blow.vtk").string()});
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("no volume cells"), std::string::npos) << r.err;
+}
+
+TEST(Replay, BadArgumentsAndInputsFailCleanly) {
+  test::TempDir tmp("args");
+  const std::string cfg = config(tmp.path() / "db", "Pressure");
+  const std::string post = (test::data_dir() / "post.vtk").string();
+  EXPECT_EQ(replay_run({}).rc, 2);
+  EXPECT_EQ(replay_run({cfg}).rc, 2);
+  EXPECT_EQ(replay_run({cfg, post, "--bogus"}).rc, 2);
+  EXPECT_EQ(replay_run({cfg, post, "--steps", "1:2"}).rc, 2);  // post.vtk has one step
+  EXPECT_EQ(replay_run({cfg, post, "--steps", "x"}).rc, 2);
+  EXPECT_EQ(replay_run({"--help"}).rc, 0);
+  const Result missing = replay_run({cfg, (tmp.path() / "missing.vtu").string()});
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_NE(missing.err.find("does not exist"), std::string::npos) << missing.err;
+  const Result bad_config = replay_run({"{\"output\":{}}", post});
+  EXPECT_EQ(bad_config.rc, 1);
+  EXPECT_NE(bad_config.err.find("config"), std::string::npos) << bad_config.err;
+}
+
+}  // namespace
+}  // namespace penumbra
