@@ -5,6 +5,7 @@
 #include <vtkExodusIIReader.h>
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
+#include <vtkLogger.h>
 #include <vtkMultiBlockDataSet.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
@@ -27,6 +28,7 @@
 #include <vector>
 
 #include "grid_merge.h"
+#include "netcdf_size.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::replay {
@@ -54,6 +56,9 @@ CapturingOutputWindow& output_window() {
   static vtkSmartPointer<CapturingOutputWindow> window = [] {
     auto w = vtkSmartPointer<CapturingOutputWindow>::New();
     vtkOutputWindow::SetInstance(w);
+    // VTK also logs errors to stderr through vtkLogger; the captured text reaches the user
+    // inside our own message instead.
+    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
     return w;
   }();
   return *window;
@@ -181,12 +186,28 @@ std::unique_ptr<InputSeries> open_json_series(const fs::path& path) {
   return std::make_unique<FileSeries>("file series '" + path.filename().string() + "'", std::move(entries));
 }
 
+/// Exodus II files are netCDF: classic "CDF\1", 64-bit offset "CDF\2", CDF-5 "CDF\5" or HDF5.
+bool has_netcdf_signature(const std::string& path) {
+  char head[8] = {};
+  std::ifstream(path, std::ios::binary).read(head, sizeof head);
+  const std::string h(head, sizeof head);
+  return (h.compare(0, 3, "CDF") == 0 && (h[3] == 1 || h[3] == 2 || h[3] == 5)) || h == "\x89HDF\r\n\x1a\n";
+}
+
 /// Exodus II: one reader kept open; every time step is a step (a mesh-only file gives one).
 class ExodusSeries : public InputSeries {
 public:
   explicit ExodusSeries(const fs::path& path) : m_path(path.string()) {
     output_window();
-    if (!m_reader->CanReadFile(m_path.c_str())) unreadable(m_path, "not an Exodus II file");
+    // Checked here first: the Exodus library prints its own complaints to stderr.
+    if (!has_netcdf_signature(m_path) || !m_reader->CanReadFile(m_path.c_str()))
+      unreadable(m_path, "not an Exodus II (netCDF) file");
+    const auto needed = netcdf_classic_min_size(m_path);
+    const auto size = fs::file_size(path);
+    if (needed && size < *needed)
+      throw Error(ErrorCode::io_error, "penumbra-replay: cannot read '" + m_path + "': file is truncated (" +
+                                           std::to_string(size) + " bytes, its header needs at least " +
+                                           std::to_string(*needed) + ")");
     m_reader->SetFileName(m_path.c_str());
     m_reader->UpdateInformation();
     if (m_reader->GetErrorCode() != 0) unreadable(m_path, "invalid Exodus II metadata");
@@ -207,6 +228,7 @@ public:
   }
   Step load(std::size_t index) override {
     if (!m_times.empty()) m_reader->SetTimeStep(static_cast<int>(index));
+    vtk_errors();  // only errors of this Update count
     m_reader->Update();
     const std::string errors = vtk_errors();
     if (m_reader->GetErrorCode() != 0 || !errors.empty())

@@ -122,6 +122,12 @@ bool same_mesh(const pnb_mesh_desc& a, const pnb_mesh_desc& b) {
          same_bytes(a.offsets, b.offsets, (cells + 1) * idx) && same_bytes(a.cell_types, b.cell_types, cells);
 }
 
+/// `text` as one stderr line starting with "penumbra-replay: " (added only where missing).
+std::string prefixed(const std::string& text) {
+  const std::string prefix = "penumbra-replay: ";
+  return (text.rfind(prefix, 0) == 0 ? text : prefix + text) + "\n";
+}
+
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -136,16 +142,22 @@ public:
     const auto [first, last] = step_range(m_opt.steps, input->size());
     if (!m_opt.quiet) m_out << "penumbra-replay: " << input->describe() << ", replaying steps " << first << ".." << last - 1 << "\n";
 
-    // Load the first step before creating the context, so a config that names fields the
-    // input lacks fails before any database directory is made.
+    // The first step is read and checked before the context exists, so an unreadable input, a
+    // surface mesh or a config naming fields the input lacks fails before any database is made.
+    auto t0 = std::chrono::steady_clock::now();
     std::optional<Step> step = load(*input, first);
-    if (step && !check_fields(*step)) return 1;
+    m_read_ms = ms_since(t0);
+    if (!step || !check_first_step(*step)) return 1;
     if (pnb_create(m_opt.config.c_str(), &m_ctx) != PNB_OK) {
       m_err << "penumbra-replay: " << pnb_last_error(nullptr) << "\n";
       return 1;
     }
     for (std::size_t i = first; i < last; ++i) {
-      if (i != first) step = load(*input, i);
+      if (i != first) {
+        t0 = std::chrono::steady_clock::now();
+        step = load(*input, i);
+        m_read_ms = ms_since(t0);
+      }
       if (step) replay_step(*step, i);
     }
     if (pnb_finalize(m_ctx) != PNB_OK) fail(std::string("finalize: ") + pnb_last_error(m_ctx));
@@ -158,7 +170,7 @@ public:
 private:
   void fail(const std::string& message) {
     ++m_failures;
-    m_err << "penumbra-replay: " << message << "\n";
+    m_err << prefixed(message);
   }
 
   std::optional<Step> load(InputSeries& input, std::size_t i) {
@@ -170,30 +182,37 @@ private:
     }
   }
 
-  bool check_fields(const Step& step) {
-    const auto wanted = configured_fields(m_opt.config);
-    if (!wanted) return true;
+  bool check_first_step(const Step& step) {
+    std::optional<vtk::UnstructuredGridAdaptor> probe;
     try {
-      vtk::UnstructuredGridAdaptor probe(step.grid);
-      std::string missing, available;
-      for (const auto& f : probe.fields()) available += (available.empty() ? "" : ", ") + std::string(f.name);
-      for (const auto& name : *wanted)
-        if (!probe.find_field(name, PNB_POINT_FIELD) && !probe.find_field(name, PNB_CELL_FIELD))
-          missing += (missing.empty() ? "'" : ", '") + name + "'";
-      if (missing.empty()) return true;
-      fail("CONFIG renders field(s) " + missing + " that INPUT '" + m_opt.input + "' does not have; available: " +
-           (available.empty() ? "none (the input is a bare mesh)" : available));
+      probe.emplace(step.grid);
+    } catch (const Error& e) {
+      fail("INPUT '" + m_opt.input + "': " + e.what());
       return false;
-    } catch (const Error&) {
-      return true;  // the step itself reports the error
     }
+    m_wanted = configured_fields(m_opt.config);
+    const auto& wanted = m_wanted;
+    if (!wanted) return true;
+    std::string missing, available;
+    for (const auto& f : probe->fields()) available += (available.empty() ? "" : ", ") + std::string(f.name);
+    for (const auto& name : *wanted)
+      if (!probe->find_field(name, PNB_POINT_FIELD) && !probe->find_field(name, PNB_CELL_FIELD))
+        missing += (missing.empty() ? "'" : ", '") + name + "'";
+    if (missing.empty()) return true;
+    fail("CONFIG renders field(s) " + missing + " that INPUT '" + m_opt.input + "' does not have; available: " +
+         (available.empty() ? "none (the input is a bare mesh)" : available));
+    return false;
   }
 
   void replay_step(const Step& step, std::size_t index) {
     const auto t0 = std::chrono::steady_clock::now();
     std::optional<vtk::UnstructuredGridAdaptor> adaptor;
     try {
-      adaptor.emplace(step.grid, m_version);
+      // Arrays that need a conversion (ids, integer materials) are converted only when the
+      // config renders them; the runtime would ignore them anyway.
+      vtk::UnstructuredGridAdaptor::CopyFilter filter;
+      if (m_wanted) filter = [this](std::string_view name) { return m_wanted->count(std::string(name)) > 0; };
+      adaptor.emplace(step.grid, m_version, filter);
     } catch (const Error& e) {
       fail("step " + std::to_string(index) + ": " + e.what());
       return;
@@ -216,12 +235,16 @@ private:
     for (const auto& f : fields.fields())
       if (pnb_publish_field(m_ctx, &f, PNB_BORROW) != PNB_OK)
         fail("step " + std::to_string(index) + ": publish field '" + f.name + "': " + pnb_last_error(m_ctx));
+    const double publish_ms = ms_since(t0);
+    const auto t1 = std::chrono::steady_clock::now();
     const pnb_status status = pnb_execute(m_ctx, step.time, step.cycle);
+    const double execute_ms = ms_since(t1);
     ++m_executed;
     if (status != PNB_OK) fail("step " + std::to_string(index) + ": execute: " + pnb_last_error(m_ctx));
     if (!m_opt.quiet)
       m_out << "  step " << index << " time " << step.time << " cycle " << step.cycle << ": "
-            << fields.fields().size() << " field(s) published, " << ms_since(t0) << " ms\n";
+            << fields.fields().size() << " field(s); read " << m_read_ms << " ms, adapt+publish " << publish_ms
+            << " ms, execute " << execute_ms << " ms\n";
   }
 
   const Options& m_opt;
@@ -229,7 +252,9 @@ private:
   std::ostream& m_err;
   pnb_context m_ctx = nullptr;
   std::optional<vtk::UnstructuredGridAdaptor> m_published;
+  std::optional<std::set<std::string>> m_wanted;  // field names the config renders, when known
   std::uint64_t m_version = 1;
+  double m_read_ms = 0;  // time to read the current step
   std::size_t m_mesh_publications = 0, m_executed = 0, m_failures = 0;
 };
 
@@ -243,8 +268,9 @@ std::string usage() {
          "  --steps a:b  replay step indices a..b-1 (0-based, half-open; 'a:', ':b' and 'a' work too)\n"
          "  --quiet      print errors only\n"
          "  The mesh is published once (republished with a new topology_version only when points or\n"
-         "  cells change); every point and cell array is published each step; TIME/CYCLE come from\n"
-         "  the data when present. Exit status: 0 ok, 1 read/render failure, 2 usage error.\n";
+         "  cells change); every float/double point and cell array is published each step (arrays\n"
+         "  needing conversion, e.g. integer ids, only when the config renders them); TIME/CYCLE\n"
+         "  come from the data when present. Exit status: 0 ok, 1 read/render failure, 2 usage error.\n";
 }
 
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
@@ -263,7 +289,7 @@ int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& e
   } catch (const std::bad_alloc&) {
     err << "penumbra-replay: out of memory\n";
   } catch (const std::exception& e) {
-    err << "penumbra-replay: " << e.what() << "\n";
+    err << prefixed(e.what());
   } catch (...) {
     err << "penumbra-replay: unknown error\n";
   }

@@ -13,8 +13,10 @@ namespace penumbra::replay {
 ///
 /// The mesh is published once with topology_version 1 and republished, with the version
 /// bumped, only when a step's points or cells differ from the last published ones. Every
-/// named numeric point and cell array is published each step (the runtime ignores those the
-/// config does not render); TIME/CYCLE come from the data when present.
+/// float/double point and cell array is published each step as a view (the runtime ignores
+/// those the config does not render); arrays that would need a conversion (integer ids,
+/// materials) are converted only when the config renders them. TIME/CYCLE come from the data
+/// when present.
 int run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 /// The usage text.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -40,9 +41,7 @@ inline std::string option(int argc, char** argv, const std::string& name, const 
   return fallback;
 }
 
-}  // namespace penumbra::bench
 
-namespace penumbra::bench {
 
 /// Difference of a rendered 8-bit RGB image from the reference.
 struct ImageError {
@@ -67,6 +66,20 @@ inline ImageError compare_rgb8(const std::vector<unsigned char>& image, const st
   }
   if (!image.empty()) e.rms_pct = 100.0 * std::sqrt(sum / static_cast<double>(image.size())) / 255.0;
   return e;
+}
+
+}  // namespace penumbra::bench
+
+
+namespace penumbra::bench {
+
+/// One-minute load average of the machine (Linux), or -1 when unknown: timings taken while
+/// other work runs are slower, and the JSON lines say so.
+inline double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double v = -1;
+  if (!(in >> v)) return -1;
+  return v;
 }
 
 }  // namespace penumbra::bench

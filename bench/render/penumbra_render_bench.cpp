@@ -123,6 +123,7 @@ int run(int argc, char** argv) {
   line["prepare_ms"] = pb::rounded(prepare_ms, 1);
   if (reference_ms >= 0) line["reference_ms"] = pb::rounded(reference_ms, 1);
   line["reference"] = ref_path;
+  line["load_avg"] = pb::load_average();
   line["image"] = image_path;
   std::cout << line.dump() << std::endl;
   return 0;

@@ -197,6 +197,7 @@ nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid*
   }
   line["integrator"] = linear_integrator ? "vtkUnstructuredGridLinearRayIntegrator" : "default";
   line["first_frame_ms"] = pb::rounded(first_ms, 1);
+  line["load_avg"] = pb::load_average();
   line["image"] = image_path;
   return line;
 }

@@ -18,10 +18,13 @@ namespace {
 
 // Grid of nx*ny*nz cubes over [0,2]x[0,2]x[0,0.5]; the quadrant x>1, y>1 is cut away (the L)
 // and so is a square hole through the middle of the x<1, y<1 quadrant.
-constexpr int nx = 32, ny = 32, nz = 8;
+constexpr int nx = 24, ny = 24, nz = 6;
 constexpr double size_xy = 2.0, size_z = 0.5;
 constexpr double h = size_xy / nx;  // cube edge (x and y); z uses size_z / nz = h as well
 constexpr double hole_lo = 0.35, hole_hi = 0.65;
+// Time loop: cycles 0..kCycles, rendering every kEvery-th from kCameras orbit cameras.
+constexpr int kCycles = 176, kEvery = 16, kCameras = 3;
+constexpr int kRenderedSteps = kCycles / kEvery + 1;
 
 bool keep_cube(int i, int j) {
   const double x = (i + 0.5) * h, y = (j + 0.5) * h;
@@ -75,13 +78,13 @@ struct Solver {
   const Mesh& mesh;
   std::vector<double> temperature;  // per mesh point
   double omega = 2.0;               // angular velocity around the hole's axis
-  double kappa = 0.004;             // diffusivity
+  double kappa = 0.001;             // diffusivity
   double cx = 0.5, cy = 0.5;
 
   explicit Solver(const Mesh& m) : mesh(m), temperature(m.xyz.size() / 3) {
     for (std::size_t p = 0; p < temperature.size(); ++p) {
       const double dx = m.xyz[3 * p] - 0.5, dy = m.xyz[3 * p + 1] - 0.12, dz = m.xyz[3 * p + 2] - 0.25;
-      temperature[p] = 20.0 + 80.0 * std::exp(-(dx * dx + dy * dy + dz * dz) / (2 * 0.08 * 0.08));
+      temperature[p] = 20.0 + 80.0 * std::exp(-(dx * dx + dy * dy + dz * dz) / (2 * 0.12 * 0.12));
     }
   }
 
@@ -118,17 +121,17 @@ struct Solver {
 std::string config_json(const std::string& out) {
   return R"({
     "output": {"directory": ")" + out + R"("},
-    "image": {"width": 256, "height": 256, "background": [1, 1, 1]},
-    "cameras": {"phi": [-60, 30, 120], "theta": [35], "fov": 30},
+    "image": {"width": 128, "height": 128, "background": [0.02, 0.02, 0.05]},
+    "cameras": {"phi": [-60, 30, 120], "theta": [50], "fov": 30},
     "fields": [{
       "name": "temperature",
-      "range": [20, 60],
+      "range": "auto",
       "transfer_function": {
-        "colors": [[0, 0.23, 0.30, 0.75], [0.5, 0.87, 0.87, 0.87], [1, 0.71, 0.02, 0.15]],
-        "opacities": [[0, 0.4], [0.3, 3], [1, 30]]
+        "colors": [[0, 0.15, 0.25, 0.7], [0.5, 0.95, 0.45, 0.1], [1, 1, 0.95, 0.6]],
+        "opacities": [[0, 4], [0.5, 8], [1, 30]]
       }
     }],
-    "trigger": {"every_cycles": 16}
+    "trigger": {"every_cycles": )" + std::to_string(kEvery) + R"(}
   })";
 }
 
@@ -164,7 +167,7 @@ int main(int argc, char** argv) {
 
   std::vector<double> pressure(desc.point_count, 101325.0);  // not in the config: ignored, not copied
   const double dt = solver.stable_dt();
-  const int cycles = 240;
+  const int cycles = kCycles;
   double execute_ms = 0;
   int failures = 0;
   for (int cycle = 0; cycle <= cycles; ++cycle) {
@@ -184,9 +187,10 @@ int main(int argc, char** argv) {
   ok(ctx, fin, "pnb_finalize");
   pnb_destroy(ctx);
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  std::printf("penumbra-example-advection: %zu tets (L-shaped slab with a hole), %d cycles, 16 rendered steps x 3 cameras\n",
-              mesh.tets.size() / 4, cycles + 1);
+  std::printf("penumbra-example-advection: %zu tets (L-shaped slab with a hole), %d cycles, %d rendered steps x %d cameras\n",
+              mesh.tets.size() / 4, cycles + 1, kRenderedSteps, kCameras);
   std::printf("  Cinema database: %s/data.csv\n", out.c_str());
-  std::printf("  time in pnb_execute: %.0f ms (%.1f ms per image), total %.2f s\n", execute_ms, execute_ms / 48, total_s);
+  std::printf("  time in pnb_execute: %.0f ms (%.1f ms per image), total %.2f s\n", execute_ms,
+              execute_ms / (kRenderedSteps * kCameras), total_s);
   return failures == 0 && fin == PNB_OK ? 0 : 1;
 }

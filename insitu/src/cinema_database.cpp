@@ -73,6 +73,25 @@ void write_file_atomic(const std::string& path, const std::string& text) {
   }
 }
 
+/// True for "name.tmp.<pid>": a temporary file of an atomic write (ours or write_png's).
+bool is_leftover_temp(const std::string& name) {
+  const auto at = name.rfind(".tmp.");
+  if (at == std::string::npos || at + 5 == name.size()) return false;
+  for (std::size_t i = at + 5; i < name.size(); ++i)
+    if (name[i] < '0' || name[i] > '9') return false;
+  return true;
+}
+
+/// Removes temporary files that a killed writer left in `dir` and its image folders; they were
+/// never listed in data.csv.
+void remove_leftover_temps(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it.depth() >= 1) it.disable_recursion_pending();  // the directory and its image folders only
+    if (it->is_regular_file(ec) && is_leftover_temp(it->path().filename().string())) fs::remove(it->path(), ec);
+  }
+}
+
 }  // namespace
 
 std::string safe_path_component(const std::string& s) {
@@ -153,7 +172,10 @@ CinemaDatabase::CinemaDatabase(std::string directory, std::vector<std::string> p
                     "to append to its database, or choose another directory)");
   if (!exists && !fs::create_directories(dir, ec))
     io_fail("cannot create output directory", m_directory, ec.value());
-  if (exists && if_exists == IfExists::resume && fs::exists(csv, ec)) load_existing(csv.string());
+  if (exists && if_exists == IfExists::resume) {
+    if (fs::exists(csv, ec)) load_existing(csv.string());
+    remove_leftover_temps(dir);
+  }
   write_csv();  // proves the directory writable now, not at the first rendered step
 }
 

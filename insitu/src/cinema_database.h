@@ -29,7 +29,8 @@ public:
   /// - IfExists::error: a missing or empty directory is used; a non-empty one is refused with
   ///   Error(invalid_argument) telling how to resume.
   /// - IfExists::resume: an existing data.csv is read and later steps are appended; a header
-  ///   that does not match `parameters` is refused with Error(invalid_argument).
+  ///   that does not match `parameters` is refused with Error(invalid_argument). Temporary
+  ///   files (`*.tmp.<pid>`) left by a killed writer are removed.
   /// Writes data.csv immediately (header at least), so an unwritable directory fails here with
   /// Error(io_error) naming the path.
   CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists);

@@ -2,6 +2,7 @@
 #include "penumbra/render/boundary_surface.h"
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
 
 #include <unordered_map>
 
@@ -25,12 +26,17 @@ BoundarySurface::BoundarySurface(const std::vector<Vec3d>& points,
     handle.emplace(id, h);
     return h;
   };
+  // OpenMesh prints a line per refused triangle; the count below carries that information, so
+  // its error stream is muted while the surface is built (and restored for the host program).
+  const bool was_enabled = omerr().is_enabled();
+  omerr().disable();
   for (const auto& t : triangles) {
     // add_face refuses triangles that would make a non-manifold vertex or edge (two bodies
     // touching at a point); those are counted, not fatal: the renderer does not need them here.
     const auto f = m.add_face(vertex(t[0]), vertex(t[1]), vertex(t[2]));
     if (!f.is_valid()) ++m_rejected;
   }
+  if (was_enabled) omerr().enable();
 }
 
 BoundarySurface::~BoundarySurface() = default;

@@ -7,6 +7,7 @@
 #include <vtkCellTypes.h>
 #include <vtkDataArray.h>
 #include <vtkGenericCell.h>
+#include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
@@ -15,6 +16,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "penumbra/core/error.h"
@@ -79,12 +81,14 @@ struct UnstructuredGridAdaptor::Impl {
   pnb_mesh_desc mesh{};
   std::vector<pnb_field_desc> fields;
   AdaptorReport report;
+  UnstructuredGridAdaptor::CopyFilter copy_filter;
 
   std::vector<double> own_points;
   std::vector<std::int64_t> own_connectivity;
   std::vector<std::int64_t> own_offsets;
   std::vector<std::uint8_t> own_types;
   std::vector<std::int64_t> kept_cells;  // filled only when cells were filtered
+  // Growing the outer vector moves the inner vectors, never their buffers: data() stays valid.
   std::vector<std::vector<double>> own_values;
 
   void build_points();
@@ -119,13 +123,16 @@ void UnstructuredGridAdaptor::Impl::build_points() {
 template <class Index>
 void UnstructuredGridAdaptor::Impl::rebuild_cells(const Index* offsets, const Index* connectivity,
                                                   const std::uint8_t* types, std::size_t n) {
-  std::map<std::uint8_t, CellMapping> cache;
+  std::array<std::optional<CellMapping>, 256> cache;  // indexed by VTK type id
   std::map<int, std::size_t> dropped_by_type;
+  own_offsets.reserve(n + 1);
   own_offsets.assign(1, 0);
+  own_connectivity.reserve(static_cast<std::size_t>(offsets[n]));
+  own_types.reserve(n);
   for (std::size_t c = 0; c < n; ++c) {
-    auto it = cache.find(types[c]);
-    if (it == cache.end()) it = cache.emplace(types[c], classify(types[c])).first;
-    const CellMapping& m = it->second;
+    std::optional<CellMapping>& cached = cache[types[c]];
+    if (!cached) cached = classify(types[c]);
+    const CellMapping& m = *cached;
     const auto begin = static_cast<std::int64_t>(offsets[c]);
     const auto size = static_cast<int>(offsets[c + 1] - offsets[c]);
     const int corners = cell_point_count(m.target);
@@ -165,7 +172,7 @@ void UnstructuredGridAdaptor::Impl::build_cells() {
 
   bool all_native = true;
   for (std::size_t c = 0; c < n && all_native; ++c)
-    all_native = cell_point_count(types[c]) > 0 && (types[c] != VTK_VOXEL);
+    all_native = cell_point_count(types[c]) > 0;
   const bool wide = cells->IsStorage64Bit();
   const void* offsets = wide ? static_cast<const void*>(cells->GetOffsetsArray64()->GetPointer(0))
                              : static_cast<const void*>(cells->GetOffsetsArray32()->GetPointer(0));
@@ -224,22 +231,26 @@ void UnstructuredGridAdaptor::Impl::build_fields(vtkDataSetAttributes* data, pnb
     if (!filter && is_packed_float(a)) {
       fields.push_back({name, association, a->GetVoidPointer(0), a->GetNumberOfTuples(),
                         a->GetNumberOfComponents(), 0, float_type(a)});
-    } else {
+    } else if (!copy_filter || copy_filter(name)) {
       fields.push_back(copy_field(a, association, filter));
+    } else {
+      report.unconverted_fields.push_back(name);
     }
   }
 }
 
 UnstructuredGridAdaptor::UnstructuredGridAdaptor(vtkUnstructuredGrid* grid, std::uint64_t topology_version)
+    : UnstructuredGridAdaptor(grid, topology_version, CopyFilter{}) {}
+
+UnstructuredGridAdaptor::UnstructuredGridAdaptor(vtkUnstructuredGrid* grid, std::uint64_t topology_version,
+                                                 CopyFilter copy_filter)
     : m_impl(std::make_unique<Impl>()) {
   require(grid != nullptr, "UnstructuredGridAdaptor: grid is null");
+  m_impl->copy_filter = std::move(copy_filter);
   m_impl->grid = grid;
   m_impl->mesh.topology_version = topology_version;
   m_impl->build_points();
   m_impl->build_cells();
-  // Owned value vectors are moved into own_values; reserve so earlier data() pointers survive.
-  m_impl->own_values.reserve(static_cast<std::size_t>(grid->GetPointData()->GetNumberOfArrays() +
-                                                      grid->GetCellData()->GetNumberOfArrays()));
   m_impl->build_fields(grid->GetPointData(), PNB_POINT_FIELD);
   m_impl->build_fields(grid->GetCellData(), PNB_CELL_FIELD);
 }
@@ -294,6 +305,7 @@ std::string AdaptorReport::summary() const {
     for (const auto& f : copied_fields) s << " " << f << ";";
   }
   if (!skipped_arrays.empty()) s << ", " << skipped_arrays.size() << " non-numeric/unnamed array(s) skipped";
+  if (!unconverted_fields.empty()) s << ", " << unconverted_fields.size() << " unused array(s) not converted";
   return s.str();
 }
 

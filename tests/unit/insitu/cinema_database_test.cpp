@@ -97,6 +97,19 @@ TEST(CinemaDatabase, ResumeAppendsToExistingRows) {
             "time,phi,theta,field,FILE\n0,0,30,T,T/a.png\n1,0,30,T,T/b2.png\n2,0,30,T,T/c.png\n");
 }
 
+TEST(CinemaDatabase, ResumeRemovesTemporaryFilesOfAKilledWriter) {
+  TempDir tmp;
+  { CinemaDatabase db(tmp / "db", kParams, IfExists::error); }
+  std::filesystem::create_directories(tmp / "db/T");
+  for (const char* f : {"db/data.csv.tmp.123", "db/T/c000001_phi0.png.tmp.77", "db/T/keep.tmp.x", "db/T/keep.png"})
+    std::ofstream(tmp / f) << "x";
+  CinemaDatabase db(tmp / "db", kParams, IfExists::resume);
+  EXPECT_FALSE(std::filesystem::exists(tmp / "db/data.csv.tmp.123"));
+  EXPECT_FALSE(std::filesystem::exists(tmp / "db/T/c000001_phi0.png.tmp.77"));
+  EXPECT_TRUE(std::filesystem::exists(tmp / "db/T/keep.tmp.x"));
+  EXPECT_TRUE(std::filesystem::exists(tmp / "db/T/keep.png"));
+}
+
 TEST(CinemaDatabase, ResumeOfNonDatabaseDirectoryStartsFresh) {
   TempDir tmp;
   std::filesystem::create_directories(tmp / "db");

@@ -83,6 +83,8 @@ TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
     const auto resumed = check_valid(dir);
     ASSERT_EQ(resumed.size(), table.size() + 12);
     for (std::size_t r = 0; r < table.size(); ++r) EXPECT_EQ(resumed[r], table[r]) << "row " << r << " changed";
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+      EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << "left over: " << e.path();
   }
 }
 

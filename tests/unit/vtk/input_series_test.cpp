@@ -7,6 +7,7 @@
 #include <map>
 
 #include "input_series.h"
+#include "netcdf_size.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/mesh_validation.h"
 #include "penumbra/vtk/unstructured_grid_adaptor.h"
@@ -162,14 +163,38 @@ TEST(VtkInputs, MissingAndCorruptFilesAreClearErrors) {
   expect_read_error(d / "truncated.vtk", "cannot read");
   copy_prefix(test::data_dir() / "can.vtu", d / "truncated.vtu", 300000);
   expect_read_error(d / "truncated.vtu", "cannot read");
-  copy_prefix(test::data_dir() / "mug.e", d / "truncated.e", 500000);
-  expect_read_error(d / "truncated.e", "cannot read");
+  // Cut inside the element blocks, and inside the time-step records (which netCDF itself would
+  // read back as zeros without complaint).
+  copy_prefix(test::data_dir() / "mug.e", d / "truncated.e", 20000);
+  expect_read_error(d / "truncated.e", "truncated");
+  copy_prefix(test::data_dir() / "mug.e", d / "truncated_records.e", 1900000);
+  expect_read_error(d / "truncated_records.e", "truncated");
   std::ofstream(d / "bad.series") << "{\"files\": [{\"name\": \"missing.vtk\", \"time\": 0}]}";
   expect_read_error(d / "bad.series", "does not exist");
   std::ofstream(d / "broken.series") << "{\"files\": [";
   expect_read_error(d / "broken.series", "not valid JSON");
   std::ofstream(d / "bad.pvd") << "<VTKFile><Collection><DataSet file=\"gone.vtu\"/></Collection></VTKFile>";
   expect_read_error(d / "bad.pvd", "does not exist");
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+TEST(VtkInputs, NetcdfHeaderGivesTheCompleteFileSize) {
+  for (const char* name : {"mug.e", "disk_out_ref.ex2", "mesh_fs8.exo"}) {
+    const auto path = test::data_dir() / name;
+    const auto needed = replay::netcdf_classic_min_size(path.string());
+    ASSERT_TRUE(needed.has_value()) << name;
+    const auto size = std::filesystem::file_size(path);
+    // The variables end where the file ends, up to padding: the bound leaves out the last
+    // variable's 3 padding bytes, and disk_out_ref.ex2 has 4 more bytes after its last variable.
+    EXPECT_LE(*needed, size) << name;
+    EXPECT_GE(*needed + 8, size) << name;
+  }
+  EXPECT_FALSE(replay::netcdf_classic_min_size((test::data_dir() / "can.vtu").string()).has_value());
 }
 
 }  // namespace

@@ -1,5 +1,9 @@
 // tests/unit/vtk/replay_test.cpp -- penumbra-replay end to end: files -> C API -> Cinema database
 #include <gtest/gtest.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkXMLUnstructuredGridWriter.h>
 
 #include <fstream>
 #include <sstream>
@@ -72,7 +76,10 @@ TEST(Replay, MugExodusAllTwentyOneSteps) {
   const auto lines = read_lines(db / "data.csv");
   ASSERT_EQ(lines.size(), 22u);
   EXPECT_EQ(png_count(db), 21u);
-  EXPECT_NE(lines.back().find("2"), std::string::npos) << "last row carries t = 2: " << lines.back();
+  // The time column comes from the file's time values: 0, 0.1, ..., 2 (written shortest-exact).
+  EXPECT_EQ(lines[1].substr(0, lines[1].find(',')), "0") << lines[1];
+  const std::string last_time = lines.back().substr(0, lines.back().find(','));
+  EXPECT_NEAR(std::stod(last_time), 2.0, 1e-12) << lines.back();
 }
 
 TEST(Replay, StepRangeSelectsSteps) { expect_database("mug.e", "convected", 3, {"--steps", "5:8"}); }
@@ -81,6 +88,16 @@ TEST(Replay, CanVtuCellField) { expect_database("can.vtu", "EQPS", 1); }
 TEST(Replay, PostLegacyVtk) { expect_database("post.vtk", "Pressure", 1); }
 TEST(Replay, MfemVtkSeries) {
   expect_database("generated/mfem_ex16_holeblock10k/mfem_ex16_holeblock10k.vtk.series", "temperature", 11);
+}
+
+TEST(Replay, ProgressReportsTimeAndCycleFromTheData) {
+  test::TempDir tmp("mfem");
+  const Result r = replay_run({config(tmp.path() / "db", "temperature"),
+                               (test::data_dir() / "generated/mfem_ex16_holeblock10k/mfem_ex16_holeblock10k.vtk.series").string(),
+                               "--steps", "2:4"});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("step 2 time 0.4 cycle 20"), std::string::npos) << r.out;  // TIME/CYCLE field data
+  EXPECT_NE(r.out.find("step 3 time 0.6 cycle 30"), std::string::npos) << r.out;
 }
 
 // mesh_fs8.exo has no result variables. The reader still provides each cell's element block id
@@ -93,8 +110,50 @@ TEST(Replay, MeshOnlyExodusRendersBlockIdsAndRefusesMissingFields) {
   const Result r = replay_run({config(db, "temperature"), (test::data_dir() / "mesh_fs8.exo").string()});
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("'temperature'"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("available: ObjectId"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("available: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ObjectId"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(db));
+}
+
+void write_block_vtu(const fs::path& path, int n) {
+  auto grid = test::to_vtk(fixtures::block(fixtures::BlockCells::tets, n, n, n, {0, 0, 0}, {1, 1, 1}));
+  vtkNew<vtkDoubleArray> f;
+  f->SetName("f");
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) f->InsertNextValue(grid->GetPoint(i)[0]);
+  grid->GetPointData()->AddArray(f);
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->SetFileName(path.string().c_str());
+  writer->SetInputData(grid);
+  ASSERT_EQ(writer->Write(), 1);
+}
+
+TEST(Replay, MeshIsRepublishedOnlyWhenItChanges) {
+  test::TempDir tmp("topology");
+  write_block_vtu(tmp.path() / "a.vtu", 2);
+  write_block_vtu(tmp.path() / "b.vtu", 3);
+  std::ofstream(tmp.path() / "run.series")
+      << R"({"files":[{"name":"a.vtu","time":0},{"name":"a.vtu","time":1},{"name":"b.vtu","time":2},)"
+      << R"({"name":"b.vtu","time":3}]})";
+  const fs::path db = tmp.path() / "db";
+  const Result r = replay_run({config(db, "f"), (tmp.path() / "run.series").string()});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("4 step(s) executed, mesh published 2 time(s)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("mesh v2"), std::string::npos) << r.out;
+  EXPECT_EQ(read_lines(db / "data.csv").size(), 5u);
+}
+
+TEST(Replay, ACorruptStepIsReportedAndTheRestStillRun) {
+  test::TempDir tmp("corrupt");
+  write_block_vtu(tmp.path() / "a.vtu", 2);
+  std::ofstream(tmp.path() / "bad.vtu") << "<VTKFile type=\"UnstructuredGrid\"> truncated";
+  std::ofstream(tmp.path() / "run.series")
+      << R"({"files":[{"name":"a.vtu","time":0},{"name":"bad.vtu","time":1},{"name":"a.vtu","time":2}]})";
+  const fs::path db = tmp.path() / "db";
+  const Result r = replay_run({config(db, "f"), (tmp.path() / "run.series").string(), "--quiet"});
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("step 1: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("bad.vtu"), std::string::npos) << r.err;
+  EXPECT_EQ(read_lines(db / "data.csv").size(), 3u) << "steps 0 and 2 are in the database";
 }
 
 TEST(Replay, SurfaceMeshIsRefused) {

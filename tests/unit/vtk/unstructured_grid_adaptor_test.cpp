@@ -220,6 +220,23 @@ TEST(VtkAdaptor, NonFloatAndNonContiguousArraysAreConvertedToFloat64) {
   EXPECT_NO_THROW(validate_mesh(a.mesh_view(), "test"));
 }
 
+TEST(VtkAdaptor, CopyFilterSkipsOnlyFieldsThatNeedACopy) {
+  auto g = test::to_vtk(small_block());
+  add_point_field(g, "p");  // float64: a view, exposed whatever the filter says
+  for (const char* name : {"ids", "material"}) {
+    vtkNew<vtkIntArray> a;
+    a->SetName(name);
+    for (vtkIdType i = 0; i < g->GetNumberOfCells(); ++i) a->InsertNextValue(static_cast<int>(i));
+    g->GetCellData()->AddArray(a);
+  }
+  UnstructuredGridAdaptor a(g, 1, [](std::string_view name) { return name == "material"; });
+  EXPECT_NE(a.find_field("p", PNB_POINT_FIELD), nullptr);
+  EXPECT_NE(a.find_field("material", PNB_CELL_FIELD), nullptr);
+  EXPECT_EQ(a.find_field("ids", PNB_CELL_FIELD), nullptr);
+  ASSERT_EQ(a.report().unconverted_fields.size(), 1u);
+  EXPECT_EQ(a.report().unconverted_fields[0], "ids");
+}
+
 TEST(VtkAdaptor, DescriptorsSurviveAMove) {
   auto g = test::to_vtk(small_block(), true);
   add_point_field(g, "p");

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -26,6 +27,7 @@ struct AdaptorReport {
   bool cells_copied = false;            ///< connectivity/offsets/types were rebuilt
   std::vector<std::string> copied_fields;   ///< fields converted or filtered into owned storage
   std::vector<std::string> skipped_arrays;  ///< arrays without a name or of a non-numeric type
+  std::vector<std::string> unconverted_fields;  ///< needed a copy but the caller's filter declined it
 
   /// One line for logs, e.g. "8750 cells: zero-copy mesh, 1 field copied (material: int32)".
   std::string summary() const;
@@ -48,11 +50,21 @@ struct AdaptorReport {
 /// The adaptor holds a reference to the grid, so the descriptors stay valid for the adaptor's
 /// lifetime as long as nobody modifies the grid's arrays. Not thread-safe. The descriptors are
 /// meant for pnb_publish_mesh/pnb_publish_field with PNB_BORROW.
+///
+/// Spell it penumbra::vtk::UnstructuredGridAdaptor: after `using namespace penumbra;` a bare
+/// `vtk::` is ambiguous with VTK's own namespace `vtk`.
 class UnstructuredGridAdaptor {
 public:
   /// Builds the views. Throws penumbra::Error(invalid_argument) when `grid` is null, has no
   /// points, or has no volume cell (e.g. a surface mesh), naming what it found instead.
   explicit UnstructuredGridAdaptor(vtkUnstructuredGrid* grid, std::uint64_t topology_version = 1);
+
+  /// Decides, by name, whether a field that cannot be viewed (it needs a conversion or a filter)
+  /// is copied. Fields that can be viewed are always exposed: they cost nothing.
+  using CopyFilter = std::function<bool(std::string_view name)>;
+  /// As above; fields for which `copy_filter` returns false are left out of fields() (and listed
+  /// in report().unconverted_fields) instead of being copied.
+  UnstructuredGridAdaptor(vtkUnstructuredGrid* grid, std::uint64_t topology_version, CopyFilter copy_filter);
   ~UnstructuredGridAdaptor();
   UnstructuredGridAdaptor(UnstructuredGridAdaptor&&) noexcept;
   UnstructuredGridAdaptor& operator=(UnstructuredGridAdaptor&&) noexcept;

@@ -1,0 +1,114 @@
+// render/src/tf_table.h -- transfer function as linear pieces, for exact segment integration
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "penumbra/render/transfer_function.h"
+#include "segment_integral.h"
+
+namespace penumbra::render::detail {
+
+/// Running front-to-back composite of one ray.
+struct Composite {
+  double rgb[3] = {0, 0, 0};  ///< premultiplied colour
+  double transmittance = 1.0;
+  double optical_depth = 0.0;
+};
+
+/// The transfer function cut at its breakpoints x_0 < ... < x_{n-1} into n + 1 pieces: piece p
+/// covers [x_{p-1}, x_p] (pieces 0 and n are the clamped ends), where extinction and colour are
+/// exactly linear in the scalar: tau(s) = tau0[p] + tau1[p] s, likewise colour.
+class TfTable {
+public:
+  explicit TfTable(const TransferFunction& tf) {
+    m_x = tf.breakpoints();
+    const std::size_t n = m_x.size();
+    m_pieces.resize(n + 1);
+    for (std::size_t p = 0; p <= n; ++p) {
+      Piece& q = m_pieces[p];
+      if (p == 0 || p == n) {  // clamped ends: constant
+        const double s = p == 0 ? -HUGE_VAL : HUGE_VAL;
+        q.tau0 = tf.extinction(s);
+        const Vec3d c = tf.color(s);
+        for (int i = 0; i < 3; ++i) q.col0[i] = c[i];
+      } else {
+        // Fit the line through two samples strictly inside the piece: exact because the
+        // function is linear there, and blind to steps (repeated x) at the piece's ends.
+        const double lo = m_x[p - 1], hi = m_x[p];
+        const double s0 = lo + 0.25 * (hi - lo), s1 = lo + 0.75 * (hi - lo);
+        const double w = 1.0 / (s1 - s0);
+        q.tau1 = (tf.extinction(s1) - tf.extinction(s0)) * w;
+        q.tau0 = tf.extinction(s0) - q.tau1 * s0;
+        const Vec3d c0 = tf.color(s0), c1 = tf.color(s1);
+        for (int i = 0; i < 3; ++i) {
+          q.col1[i] = (c1[i] - c0[i]) * w;
+          q.col0[i] = c0[i] - q.col1[i] * s0;
+        }
+      }
+      const double lo = p == 0 ? m_x[0] : m_x[p - 1], hi = p == n ? m_x[n - 1] : m_x[p];
+      q.empty = q.tau0 + q.tau1 * lo <= 0.0 && q.tau0 + q.tau1 * hi <= 0.0;
+    }
+  }
+
+  /// Piece holding s (s not NaN): the number of breakpoints <= s.
+  int piece(double s) const {
+    return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin());
+  }
+
+  /// True when the transfer function has zero extinction over the whole scalar range [lo, hi].
+  bool empty_range(double lo, double hi) const {
+    const int p0 = piece(lo), p1 = piece(hi);
+    for (int p = p0; p <= p1; ++p)
+      if (!m_pieces[static_cast<std::size_t>(p)].empty) return false;
+    return true;
+  }
+
+  /// Composites the segment of `length` whose scalar runs linearly from s0 (front) to s1
+  /// (back) onto `acc`, exactly (see segment_integral.h). NaN ends make the segment empty.
+  void integrate(double s0, double s1, double length, Composite& acc) const {
+    if (!(length > 0.0) || std::isnan(s0) || std::isnan(s1)) return;
+    const int p0 = piece(s0), p1 = piece(s1);
+    if (p0 == p1) {
+      integrate_in_piece(m_pieces[static_cast<std::size_t>(p0)], s0, s1, length, acc);
+      return;
+    }
+    // Cut at every breakpoint between s0 and s1; the distance is linear in the scalar.
+    const int step = p1 > p0 ? 1 : -1;
+    const double inv_ds = 1.0 / (s1 - s0);
+    double sa = s0, fa = 0.0;
+    for (int p = p0;; p += step) {
+      const bool last = p == p1;
+      const double sb = last ? s1 : m_x[static_cast<std::size_t>(step > 0 ? p : p - 1)];
+      const double fb = last ? 1.0 : (sb - s0) * inv_ds;
+      integrate_in_piece(m_pieces[static_cast<std::size_t>(p)], sa, sb, (fb - fa) * length, acc);
+      if (last) break;
+      sa = sb;
+      fa = fb;
+    }
+  }
+
+private:
+  struct Piece {
+    double tau0 = 0, tau1 = 0, col0[3] = {0, 0, 0}, col1[3] = {0, 0, 0};
+    bool empty = true;
+  };
+
+  static void integrate_in_piece(const Piece& q, double sa, double sb, double length, Composite& acc) {
+    if (q.empty || !(length > 0.0)) return;
+    const double a = std::max(0.0, q.tau0 + q.tau1 * sa) * length;
+    const double b = std::max(0.0, q.tau0 + q.tau1 * sb) * length;
+    if (a == 0.0 && b == 0.0) return;
+    const double cf[3] = {q.col0[0] + q.col1[0] * sa, q.col0[1] + q.col1[1] * sa, q.col0[2] + q.col1[2] * sa};
+    const double cb[3] = {q.col0[0] + q.col1[0] * sb, q.col0[1] + q.col1[1] * sb, q.col0[2] + q.col1[2] * sb};
+    const PieceResult r = integrate_piece(a, b, cf, cb);
+    for (int c = 0; c < 3; ++c) acc.rgb[c] += acc.transmittance * r.rgb[c];
+    acc.transmittance *= r.transmittance;
+    acc.optical_depth += 0.5 * (a + b);
+  }
+
+  std::vector<double> m_x;
+  std::vector<Piece> m_pieces;
+};
+
+}  // namespace penumbra::render::detail
