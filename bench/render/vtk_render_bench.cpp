@@ -167,11 +167,15 @@ nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid*
   pb::Stopwatch first_clock;
   window->Render();
   const double first_ms = first_clock.ms();
+  std::fprintf(stderr, "pnb_bench_render_vtk: %s %s warm-up frame: %.1f ms\n", scene.name.c_str(), renderer.c_str(),
+               first_ms);
   std::vector<double> times;
   for (int f = 0; f < frames; ++f) {
     pb::Stopwatch frame_clock;
     window->Render();
     times.push_back(frame_clock.ms());
+    std::fprintf(stderr, "pnb_bench_render_vtk: %s %s frame %d: %.1f ms\n", scene.name.c_str(), renderer.c_str(), f + 1,
+                 times.back());
   }
   const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
   const std::string image_path = data_dir + "/images/" + scene.name + "-" + renderer + ".png";

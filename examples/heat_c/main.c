@@ -72,10 +72,10 @@ int main(int argc, char** argv) {
            " \"fields\": ["
            "   {\"name\": \"temperature\", \"range\": [0, 1], \"transfer_function\": {"
            "      \"colors\": [[0, 0.1, 0.1, 0.4], [0.4, 0.9, 0.3, 0.1], [1, 1, 1, 0.6]],"
-           "      \"opacities\": [[0, 0], [0.1, 0.5], [1, 12]]}},"
+           "      \"opacities\": [[0, 0.6], [0.1, 1], [1, 12]]}},"
            "   {\"name\": \"conductivity\", \"transfer_function\": {"
            "      \"colors\": [[0, 0.2, 0.5, 0.9], [1, 0.9, 0.8, 0.2]], \"opacities\": [[0, 1], [1, 3]]}}],"
-           " \"trigger\": {\"every_cycles\": 25}}",
+           " \"trigger\": {\"every_cycles\": 100}}",
            out);
   if (!check(NULL, pnb_create(config, &ctx), "pnb_create")) return 1;
 
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
     check(ctx, pnb_publish_field(ctx, &f, PNB_COPY), "pnb_publish_field(conductivity)");
   }
 
-  for (cycle = 0; cycle <= 250; ++cycle) {
+  for (cycle = 0; cycle <= 1000; ++cycle) {
     const double dt = 0.12 * h * h; /* explicit diffusion limit h^2 / (6 k_max), with margin */
     pnb_field_desc t = {"temperature", PNB_POINT_FIELD, temperature, NPTS, 1, 0, PNB_FLOAT64};
     check(ctx, pnb_publish_field(ctx, &t, PNB_BORROW), "pnb_publish_field(temperature)");
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
   }
   if (!check(ctx, pnb_finalize(ctx), "pnb_finalize")) ++failures;
   pnb_destroy(ctx);
-  printf("penumbra-example-c: %d hexahedra, 251 cycles, 11 rendered steps x 2 fields x 2 cameras\n", NCELLS);
+  printf("penumbra-example-c: %d hexahedra, 1001 cycles, 11 rendered steps x 2 fields x 2 cameras\n", NCELLS);
   printf("  Cinema database: %s/data.csv\n", out);
   return failures == 0 ? 0 : 1;
 }

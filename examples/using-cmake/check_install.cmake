@@ -18,7 +18,16 @@ run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples/using-cmake -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${prefix}
     -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
-# Dependencies between the installed libraries resolve through the loader path, as for any
-# package installed outside the system library directories.
-run(${CMAKE_COMMAND} -E env LD_LIBRARY_PATH=${prefix}/${LIBDIR}:$ENV{LD_LIBRARY_PATH} ${WORK_DIR}/build/penumbra-using-cmake)
+# No LD_LIBRARY_PATH: the installed libraries find each other through their $ORIGIN run path.
+run(${WORK_DIR}/build/penumbra-using-cmake)
+# The pkg-config file is relocatable: compile and run the same program through it.
+find_program(PKG_CONFIG pkg-config REQUIRED)
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${prefix}/${LIBDIR}/pkgconfig ${PKG_CONFIG} --cflags --libs penumbra
+  OUTPUT_VARIABLE pc_flags OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "pkg-config cannot find penumbra in ${prefix}")
+endif()
+separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
+run(cc ${SOURCE_DIR}/examples/using-cmake/main.c ${pc_flags} -o ${WORK_DIR}/penumbra-using-pkg-config)
+run(${WORK_DIR}/penumbra-using-pkg-config)
 file(REMOVE_RECURSE ${WORK_DIR})

@@ -1,5 +1,6 @@
 // insitu/src/c_api.cpp -- the C API: argument checks, conversion to views, and the guard that
 // keeps every exception out of the host program
+#include <cstring>
 #include <new>
 #include <string>
 
@@ -52,18 +53,29 @@ pnb_status null_context(const char* call) noexcept {
   return record(nullptr, PNB_INVALID_ARGUMENT, (std::string(call) + ": ctx is NULL").c_str());
 }
 
-penumbra::ScalarType scalar_type(pnb_type t) { return static_cast<penumbra::ScalarType>(t); }
+/// The integer a C caller stored in an enum field. C allows any int there, but in C++ reading an
+/// out-of-range value through the enum type is undefined, so the bytes are read as an int.
+template <class Enum>
+int raw(const Enum& e) {
+  static_assert(sizeof(Enum) == sizeof(int), "C enums are int-sized");
+  int v;
+  std::memcpy(&v, &e, sizeof v);
+  return v;
+}
 
-bool is_float(pnb_type t) { return t == PNB_FLOAT32 || t == PNB_FLOAT64; }
-bool is_index(pnb_type t) { return t == PNB_INT32 || t == PNB_INT64; }
+penumbra::ScalarType scalar_type(const pnb_type& t) { return static_cast<penumbra::ScalarType>(raw(t)); }
+
+bool is_float(const pnb_type& t) { return raw(t) == PNB_FLOAT32 || raw(t) == PNB_FLOAT64; }
+bool is_index(const pnb_type& t) { return raw(t) == PNB_INT32 || raw(t) == PNB_INT64; }
+bool valid_ownership(const pnb_ownership& o) { return raw(o) == PNB_BORROW || raw(o) == PNB_COPY; }
 
 /// Checks what can be checked without reading the arrays, then wraps them in a MeshView.
 /// validate_mesh (inside preparation) checks their contents.
 penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
   using penumbra::require;
   const std::string who = "pnb_publish_mesh: ";
-  require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(d.point_type));
-  require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(d.index_type));
+  require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(raw(d.point_type)));
+  require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(raw(d.index_type)));
   require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
   require(d.points != nullptr, who + "points is NULL");
   const std::int64_t item = 3 * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
@@ -104,13 +116,13 @@ penumbra::FieldView field_view(const pnb_field_desc& d) {
   require(d.name != nullptr, who + "name is NULL");
   penumbra::FieldView f;
   f.name = d.name;
-  require(d.association == PNB_POINT_FIELD || d.association == PNB_CELL_FIELD,
+  require(raw(d.association) == PNB_POINT_FIELD || raw(d.association) == PNB_CELL_FIELD,
           who + "field '" + f.name + "': association must be PNB_POINT_FIELD or PNB_CELL_FIELD");
   require(is_float(d.type), who + "field '" + f.name + "': type must be PNB_FLOAT32 or PNB_FLOAT64");
   require(d.components >= 1, who + "field '" + f.name + "': components must be >= 1, got " + std::to_string(d.components));
   require(d.count >= 0, who + "field '" + f.name + "': count must be >= 0, got " + std::to_string(d.count));
   const std::int64_t item = d.components * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.type)));
-  f.association = d.association == PNB_POINT_FIELD ? penumbra::Association::point : penumbra::Association::cell;
+  f.association = raw(d.association) == PNB_POINT_FIELD ? penumbra::Association::point : penumbra::Association::cell;
   f.type = scalar_type(d.type);
   f.components = d.components;
   f.values = {static_cast<const std::byte*>(d.values), static_cast<std::size_t>(d.count),
@@ -137,7 +149,7 @@ pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_owne
   if (!ctx) return null_context("pnb_publish_mesh");
   return guarded(ctx, [&] {
     penumbra::require(mesh != nullptr, "pnb_publish_mesh: mesh is NULL");
-    penumbra::require(own == PNB_BORROW || own == PNB_COPY, "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
+    penumbra::require(valid_ownership(own), "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
     // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
     ctx->context->publish_mesh(mesh_view(*mesh));
   });
@@ -147,8 +159,8 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
   if (!ctx) return null_context("pnb_publish_field");
   return guarded(ctx, [&] {
     penumbra::require(field != nullptr, "pnb_publish_field: field is NULL");
-    penumbra::require(own == PNB_BORROW || own == PNB_COPY, "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
-    ctx->context->publish_field(field_view(*field), own == PNB_COPY);
+    penumbra::require(valid_ownership(own), "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
+    ctx->context->publish_field(field_view(*field), raw(own) == PNB_COPY);
   });
 }
 

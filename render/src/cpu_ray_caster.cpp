@@ -56,6 +56,43 @@ struct WalkStats {
 };
 
 constexpr int kMaxZeroLengthSteps = 1024;
+// Relative to the mesh diagonal: stretches inside shorter than this are grazes, not entries.
+constexpr double kGrazeLength = 1e-12;
+
+// Spreads the low 21 bits of x to every third bit.
+std::uint64_t spread_bits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+// Tet ids sorted by the Morton code of their centroids.
+std::vector<std::int32_t> morton_order(const TetMesh& m) {
+  const Vec3d lo = m.bounds.lo, ext = m.bounds.hi - m.bounds.lo;
+  const double scale[3] = {ext.x > 0 ? 2097151.0 / ext.x : 0.0, ext.y > 0 ? 2097151.0 / ext.y : 0.0,
+                           ext.z > 0 ? 2097151.0 / ext.z : 0.0};
+  std::vector<std::pair<std::uint64_t, std::int32_t>> keyed(m.tets.size());
+  parallel_for(keyed.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      Vec3d c{0, 0, 0};
+      for (int k = 0; k < 4; ++k) c = c + m.points[static_cast<std::size_t>(m.tets[t][k])];
+      std::uint64_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double g = std::clamp((c[a] * 0.25 - lo[a]) * scale[a], 0.0, 2097151.0);
+        code |= spread_bits(static_cast<std::uint64_t>(g)) << a;
+      }
+      keyed[t] = {code, static_cast<std::int32_t>(t)};
+    }
+  });
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::int32_t> order(keyed.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  return order;
+}
 
 }  // namespace
 
@@ -79,17 +116,24 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   require(tm.neighbors.size() == tm.tets.size(), "CpuRayCaster: mesh has " + std::to_string(tm.neighbors.size()) +
                                                      " neighbour entries for " + std::to_string(tm.tets.size()) +
                                                      " tets; expected a mesh from prepare_tet_mesh");
+  // Walk records in Morton order of the tet centroids, so that a tile of rays walking through a
+  // region touches few cache lines whatever the input ordering.
+  const std::vector<std::int32_t> order = morton_order(tm);
+  std::vector<std::int32_t> rank(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
   tets.resize(tm.tets.size());
   parallel_for(tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
+    for (std::size_t i = b; i < e; ++i) {
+      const auto t = static_cast<std::size_t>(order[i]);
       for (int k = 0; k < 4; ++k) {
-        tets[t].v[k] = tm.tets[t][k];
+        tets[i].v[k] = tm.tets[t][k];
         const std::int32_t n = tm.neighbors[t][k];
-        tets[t].next[k] = -1;
+        tets[i].next[k] = -1;
         if (n < 0) continue;
         // The shared face's index in the neighbour: the face whose neighbour is t.
         for (int j = 0; j < 4; ++j)
-          if (tm.neighbors[static_cast<std::size_t>(n)][j] == static_cast<std::int32_t>(t)) tets[t].next[k] = (n << 2) | j;
+          if (tm.neighbors[static_cast<std::size_t>(n)][j] == static_cast<std::int32_t>(t))
+            tets[i].next[k] = (rank[static_cast<std::size_t>(n)] << 2) | j;
       }
     }
   });
@@ -104,7 +148,7 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
       tri.v[j] = tv[kFaceVertices[bf.face][j]];
       box.extend(tm.points[static_cast<std::size_t>(tri.v[j])]);
     }
-    tri.tet = bf.tet;
+    tri.tet = rank[static_cast<std::size_t>(bf.tet)];
     tri.face = bf.face;
     triangles.push_back(tri);
     boxes.push_back(box);
@@ -116,7 +160,15 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, s
   out.clear();
   const auto& pts = mesh->points;
   constexpr double inf = std::numeric_limits<double>::infinity();
-  bvh.for_each_on_line(f.origin, f.d, -inf, inf, [&](std::int32_t i) {
+  // Entries behind the origin matter only when the origin may be inside the mesh (the walk from
+  // such an entry reaches t = 0 inside); from outside the bounds every stretch inside the mesh
+  // lies wholly in front of or behind the origin.
+  const Bounds& b = mesh->bounds;
+  const double pad = 1e-9 * b.diagonal();
+  const Vec3d& o = f.origin;
+  const bool outside = o.x < b.lo.x - pad || o.y < b.lo.y - pad || o.z < b.lo.z - pad || o.x > b.hi.x + pad ||
+                       o.y > b.hi.y + pad || o.z > b.hi.z + pad;
+  bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, [&](std::int32_t i) {
     const BoundaryTriangle& tri = triangles[static_cast<std::size_t>(i)];
     Projected q[3];
     for (int j = 0; j < 3; ++j) q[j] = f.project(pts[static_cast<std::size_t>(tri.v[j])]);
@@ -150,28 +202,43 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
   std::int32_t tet = entry.tet;
   int k = entry.face;
   double t_in = entry.t, s_in = entry.s;
+  int p_in = std::isnan(s_in) ? -1 : tf.piece(s_in);  // transfer-function piece, -1 for NaN
   const double length_before = stats.length;
   int zero_steps = 0;
+  std::int32_t face_id[3] = {-1, -1, -1};
+  Projected face_q[3];
   for (std::size_t step = 0; step <= tets.size(); ++step) {
     const WalkTet& w = tets[static_cast<std::size_t>(tet)];
     const int* abc = kAbc[k];
     const std::int32_t id[4] = {w.v[k], w.v[abc[0]], w.v[abc[1]], w.v[abc[2]]};  // D, A, B, C
+    // The entry face is the previous tet's exit face: reuse its projections (bit-identical to
+    // projecting again); only a welded duplicate point (another id) is projected anew.
     Projected q[4];
-    for (int j = 0; j < 4; ++j) q[j] = f.project(pts[static_cast<std::size_t>(id[j])]);
+    q[0] = f.project(pts[static_cast<std::size_t>(id[0])]);
+    for (int j = 1; j < 4; ++j) {
+      const bool m0 = id[j] == face_id[0], m1 = id[j] == face_id[1], m2 = id[j] == face_id[2];
+      if (m0 | m1 | m2) [[likely]]
+        q[j] = face_q[static_cast<int>(m1) + 2 * static_cast<int>(m2)];  // index, not branches
+      else
+        q[j] = f.project(pts[static_cast<std::size_t>(id[j])]);
+    }
     double e_d[4];  // e(D, X) for X = A, B, C at 1..3
-    bool pos[4];
+    int pattern = 0;
     for (int j = 1; j < 4; ++j) {
       e_d[j] = edge_value(q[0], id[0], q[j], id[j]);
-      pos[j] = edge_sign(e_d[j], q[0], id[0], q[j], id[j]) > 0;
+      pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
     }
     // Exit through (D,A,B) iff e(D,A) > 0 >= e(D,B), and cyclically; exactly one holds for any
-    // consistent sign pattern (the entry face's own edges are known to be on the inside).
-    int x, y;  // exit face (D, X, Y) by position in id[]
-    if (pos[1] && !pos[2]) { x = 1; y = 2; }
-    else if (pos[2] && !pos[3]) { x = 2; y = 3; }
-    else if (pos[3] && !pos[1]) { x = 3; y = 1; }
-    else { x = 1; y = 2; }  // unreachable with consistent signs; the ray grazes D
+    // consistent sign pattern (the entry face's own edges are known to be on the inside), so a
+    // table replaces the hard-to-predict branches. Patterns 0 and 7 cannot occur with
+    // consistent signs (the ray would have to pass exactly through D, which the tie rule
+    // excludes); they fall back to (D,A,B).
+    constexpr int kExitX[8] = {1, 1, 2, 2, 3, 1, 3, 1};
+    const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
     const int opposite = abc[5 - x - y];  // local index of the vertex not on the exit face
+    // Start fetching the next tet now so that the integration below hides the memory latency.
+    const std::int32_t next = w.next[opposite];
+    if (next >= 0) __builtin_prefetch(&tets[static_cast<std::size_t>(next >> 2)]);
     double wd = edge_value(q[x], id[x], q[y], id[y]);
     double wx = -e_d[y], wy = e_d[x];
     wd = std::max(0.0, wd);
@@ -184,6 +251,7 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
       t_out = (wd * q[0].depth + wx * q[x].depth + wy * q[y].depth) * inv;
       s_out = (wd * scalars[id[0]] + wx * scalars[id[x]] + wy * scalars[id[y]]) * inv;
     }
+    const int p_out = std::isnan(s_out) ? -1 : tf.piece_near(s_out, p_in);
     if (t_out <= t_in) {
       t_out = t_in;
       if (++zero_steps > kMaxZeroLengthSteps) {
@@ -194,12 +262,16 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
       zero_steps = 0;
       // Only the part in front of the origin counts (the eye may sit inside the mesh).
       double t0 = t_in, s0 = s_in;
+      int p0 = p_in;
       if (t0 < 0.0 && t_out > 0.0) {
         s0 = s_in + (s_out - s_in) * (-t_in / (t_out - t_in));
         t0 = 0.0;
+        p0 = std::isnan(s0) ? -1 : tf.piece(s0);
       }
       if (t_out > t0 && t0 >= 0.0) {
-        tf.integrate(s0, s_out, t_out - t0, acc);
+        // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
+        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0)))
+          tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc);
         stats.length += t_out - t0;
         ++stats.segments;
         if (acc.transmittance < stop_transmittance) break;
@@ -207,13 +279,20 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     }
     t_in = t_out;
     s_in = s_out;
-    const std::int32_t next = w.next[opposite];
+    p_in = p_out;
+    face_id[0] = id[0];
+    face_id[1] = id[x];
+    face_id[2] = id[y];
+    face_q[0] = q[0];
+    face_q[1] = q[x];
+    face_q[2] = q[y];
     if (next < 0) break;
     tet = next >> 2;
     k = next & 3;
     if (step == tets.size()) ++stats.aborted;  // a straight line meets each tet only once
   }
-  if (stats.length > length_before) ++stats.entries;
+  // A graze along the boundary (a few rounding units long) is not counted as an entry.
+  if (stats.length - length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
   return t_in;
 }
 

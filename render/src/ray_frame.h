@@ -45,21 +45,35 @@ struct RayFrame {
   }
 };
 
-/// Raw value of e(a, b) = q_a x q_b computed in the canonical direction (smaller id first).
+/// Raw value of e(a, b) = q_a x q_b computed in the canonical direction (smaller id first):
+/// selects rather than branches, since the id order is unpredictable along a walk.
 inline double edge_value(const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) {
-  if (ia <= ib) return a.x * b.y - a.y * b.x;
-  return -(b.x * a.y - b.y * a.x);
+  const bool forward = ia <= ib;
+  const Projected& p = forward ? a : b;
+  const Projected& q = forward ? b : a;
+  const double v = p.x * q.y - p.y * q.x;
+  return forward ? v : -v;
 }
 
 /// Sign of e(a, b) with the simulation-of-simplicity tie rule (see the file comment).
 inline int edge_sign(double value, const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) {
   if (value > 0) return 1;
   if (value < 0) return -1;
-  const double dy = ia <= ib ? b.y - a.y : -(a.y - b.y);
-  if (dy != 0) return dy > 0 ? -1 : 1;
-  const double dx = ia <= ib ? b.x - a.x : -(a.x - b.x);
-  if (dx != 0) return dx > 0 ? 1 : -1;
-  return 0;
+  const bool forward = ia <= ib;
+  const Projected& p = forward ? a : b;
+  const Projected& q = forward ? b : a;
+  const double dy = q.y - p.y, dx = q.x - p.x;
+  int s = dy != 0 ? (dy > 0 ? -1 : 1) : (dx != 0 ? (dx > 0 ? 1 : -1) : 0);
+  return forward ? s : -s;
+}
+
+/// edge_sign(...) > 0 without a data-dependent branch in the common case (value != 0): the
+/// walk evaluates three per step and their signs are unpredictable.
+inline bool edge_positive(double value, const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) {
+  bool positive = value > 0;
+  if (value == 0) [[unlikely]]
+    positive = edge_sign(value, a, ia, b, ib) > 0;
+  return positive;
 }
 
 }  // namespace penumbra::render::detail

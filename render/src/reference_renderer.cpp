@@ -177,17 +177,24 @@ RayTrace integrate_intervals(const TetMesh& mesh, const std::vector<float>& scal
   std::sort(iv.begin(), iv.end());
   Accum acc;
   RayTrace out;
-  const double gap = 1e-9 * std::max(mesh.bounds.diagonal(), 1e-300);
-  double last_end = -std::numeric_limits<double>::infinity();
+  // Runs of intervals separated by gaps are entries; runs shorter than `graze` (rounding-size
+  // touches of the boundary) are not counted, as in the fast renderer.
+  const double gap = 1e-9 * mesh.bounds.diagonal(), graze = 1e-12 * mesh.bounds.diagonal();
+  double last_end = -std::numeric_limits<double>::infinity(), run_length = 0;
   for (const Interval& i : iv) {
     const double s0 = scalar_at(mesh, scalars, i.tet, r.o + r.d * i.t0);
     const double s1 = scalar_at(mesh, scalars, i.tet, r.o + r.d * i.t1);
     integrate_interval(tf, breaks, s0, s1, i.t1 - i.t0, acc);
-    if (i.t0 > last_end + gap) ++out.entries;
+    if (i.t0 > last_end + gap) {
+      out.entries += run_length > graze;
+      run_length = 0;
+    }
     last_end = std::max(last_end, i.t1);
+    run_length += i.t1 - i.t0;
     out.length_inside += i.t1 - i.t0;
     ++out.segments;
   }
+  out.entries += run_length > graze;
   for (int c = 0; c < 3; ++c) out.rgba[c] = acc.rgb[c];
   out.rgba[3] = 1.0 - acc.transmittance;
   out.optical_depth = acc.optical_depth;

@@ -56,6 +56,17 @@ public:
     return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin());
   }
 
+  /// piece(s), checking the piece `hint` (the previous sample's, usually the same) first.
+  int piece_near(double s, int hint) const {
+    if (hint >= 0) {
+      const auto h = static_cast<std::size_t>(hint);
+      const bool above_lo = hint == 0 || s >= m_x[h - 1];
+      const bool below_hi = h == m_x.size() || s < m_x[h];
+      if (above_lo && below_hi) return hint;
+    }
+    return piece(s);
+  }
+
   /// True when the transfer function has zero extinction over the whole scalar range [lo, hi].
   bool empty_range(double lo, double hi) const {
     const int p0 = piece(lo), p1 = piece(hi);
@@ -64,11 +75,19 @@ public:
     return true;
   }
 
+  /// True when piece p has zero extinction throughout.
+  bool piece_empty(int p) const { return m_pieces[static_cast<std::size_t>(p)].empty; }
+
   /// Composites the segment of `length` whose scalar runs linearly from s0 (front) to s1
   /// (back) onto `acc`, exactly (see segment_integral.h). NaN ends make the segment empty.
   void integrate(double s0, double s1, double length, Composite& acc) const {
-    if (!(length > 0.0) || std::isnan(s0) || std::isnan(s1)) return;
-    const int p0 = piece(s0), p1 = piece(s1);
+    if (std::isnan(s0) || std::isnan(s1)) return;
+    integrate(s0, piece(s0), s1, piece(s1), length, acc);
+  }
+
+  /// As above with the pieces of s0 and s1 already known (neither s is NaN).
+  void integrate(double s0, int p0, double s1, int p1, double length, Composite& acc) const {
+    if (!(length > 0.0)) return;
     if (p0 == p1) {
       integrate_in_piece(m_pieces[static_cast<std::size_t>(p0)], s0, s1, length, acc);
       return;

@@ -57,6 +57,21 @@ TEST(BeerLambert, RenderedImageMatchesClosedFormPerPixel) {
   EXPECT_GT(inside, cam.width * cam.height / 4);
 }
 
+TEST(BeerLambert, EyeInsideTheMeshIntegratesOnlyInFront) {
+  const Vec3d lo{0, 0, 0}, hi{1, 1, 1};
+  const auto mesh = test::prepare(fixtures::block(BlockCells::tets, 5, 5, 5, lo, hi));
+  render::CpuRayCaster caster(mesh);
+  const std::vector<float> scalars(mesh->points.size(), 0.0f);
+  const Vec3d o{0.43, 0.51, 0.37}, d = normalize(Vec3d{1, 0.3, 0.2});
+  const double len = test::chord(lo, hi, o, d);  // from the eye to the exit
+  const auto r = caster.trace(scalars, test::constant_tf(2.0), {o, d});
+  // The walk starts at the entry behind the eye and counts only t >= 0; same 1e-12 as above.
+  EXPECT_NEAR(r.length_inside, len, 1e-12);
+  EXPECT_NEAR(r.optical_depth, 2.0 * len, 1e-12);
+  const auto ref = render::trace_reference(*mesh, scalars, test::constant_tf(2.0), {o, d});
+  EXPECT_NEAR(ref.length_inside, len, 1e-12);
+}
+
 TEST(BeerLambert, EarlyTerminationStopsAtThreshold) {
   const Vec3d lo{0, 0, 0}, hi{1, 1, 1};
   const auto mesh = test::prepare(fixtures::block(BlockCells::tets, 8, 8, 8, lo, hi));

@@ -259,6 +259,24 @@ int main(void) {
          "call pnb_publish_mesh first", "field before mesh");
   test_mesh_errors(ctx);
 
+  {
+    /* Explicit offsets and one type per cell (as a mixed-cell mesh would give them). */
+    int32_t offsets[NT + 1];
+    uint8_t types[NT];
+    int i;
+    for (i = 0; i <= NT; ++i) offsets[i] = 4 * i;
+    for (i = 0; i < NT; ++i) types[i] = PNB_TETRA;
+    mesh = good_mesh();
+    mesh.offsets = offsets;
+    mesh.cell_types = types;
+    mesh.cell_types_count = NT;
+    mesh.topology_version = 5;
+    expect(pnb_publish_mesh(ctx, &mesh, PNB_COPY), PNB_OK, ctx, NULL, "publish mesh with offsets and per-cell types");
+    offsets[3] = 99;
+    mesh.topology_version = 6;
+    expect(pnb_publish_mesh(ctx, &mesh, PNB_COPY), PNB_INVALID_ARGUMENT, ctx, "cell 2 has offsets [8, 99)",
+           "offsets past the connectivity");
+  }
   mesh = good_mesh();
   expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish valid mesh");
   expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "republish same topology");

@@ -73,16 +73,26 @@ typedef struct {
   pnb_type type;
 } pnb_field_desc;
 
-/* Creates a context from a JSON config: a file path, or JSON text starting with '{'. */
+/* Creates a context from a JSON config: a file path, or JSON text starting with '{' (schema in
+ * insitu/README.md). Opens the output database at once: PNB_INVALID_ARGUMENT for a bad config
+ * or a non-empty output directory without "if_exists": "resume", PNB_IO_ERROR (naming the path)
+ * when the directory cannot be created or written, PNB_BACKEND_UNAVAILABLE for a backend this
+ * build lacks. On failure *out is NULL and pnb_last_error(NULL) tells why. */
 pnb_status pnb_create(const char* config, pnb_context* out);
-/* Publishes (or republishes) the mesh. */
+/* Publishes (or republishes) the mesh: validates it (errors name the offending cell or point)
+ * and prepares it for rendering. Penumbra copies what it keeps, so the arrays may be freed after
+ * the call whatever `own` says. Republishing the same topology_version returns at once. */
 pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own);
 /* Publishes one field for the next execute. Fields the config does not render are ignored
- * (not copied). */
+ * (not read, not copied). PNB_BORROW fields are read during the next pnb_execute and then
+ * forgotten; PNB_COPY fields are copied now and kept until republished or the topology changes.
+ * PNB_INVALID_OPERATION before the first mesh. */
 pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_ownership own);
 /* Runs the per-step pipeline for simulation time `time` and step `cycle`: renders if the
  * config's trigger fires and appends the images to the Cinema database. A failed step is
- * recorded and skipped; later steps still run. */
+ * recorded and skipped; later steps still run. A configured field that was not published for a
+ * rendering step gives PNB_INVALID_OPERATION naming it (the other fields are still written);
+ * so does a call before any mesh was published. */
 pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle);
 /* Finalizes: flushes pending work; the context stays valid only for pnb_destroy. */
 pnb_status pnb_finalize(pnb_context ctx);

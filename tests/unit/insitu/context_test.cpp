@@ -191,6 +191,21 @@ TEST(Context, RangeAndDataUnitsSelectTheColour) {
   EXPECT_LT(b[0], 30);
 }
 
+TEST(Context, OpacityUnitsDiagonalAndWorldAgree) {
+  Scene s;
+  // The unit cube's diagonal is sqrt(3): a = 0.6 per world unit equals a = 0.6*sqrt(3) per diagonal.
+  // Moderate opacity keeps the pixel sensitive to the extinction scale; 1/255 allows PNG rounding.
+  const auto world = centre_pixel(s.blob, R"({"name": "T", "transfer_function": {"opacity_unit": "world",
+      "colors": [[0, 0, 0, 0]], "opacities": [[0, 0.6]]}})");
+  const auto diagonal = centre_pixel(s.blob, R"({"name": "T", "transfer_function": {"opacity_unit": "diagonal",
+      "colors": [[0, 0, 0, 0]], "opacities": [[0, 1.0392304845413265]]}})");
+  const auto thinner = centre_pixel(s.blob, R"({"name": "T", "transfer_function": {"opacity_unit": "diagonal",
+      "colors": [[0, 0, 0, 0]], "opacities": [[0, 0.6]]}})");
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(world[c], diagonal[c], 1);
+  EXPECT_GT(thinner[0], world[0] + 10);  // less extinction: more of the white background shows
+  EXPECT_LT(world[0], 200);
+}
+
 TEST(Context, ExecuteBeforeMeshAndAfterFinalizeAreInvalidOperations) {
   TempDir tmp;
   Scene s;
