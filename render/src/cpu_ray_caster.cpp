@@ -101,6 +101,7 @@ struct CpuRayCaster::Impl {
   std::vector<WalkTet> tets;
   std::vector<BoundaryTriangle> triangles;
   detail::Bvh bvh;
+  double reentry_slack = 0;  // depth tolerance for re-entering at an exit (see trace_ray)
 
   explicit Impl(std::shared_ptr<const TetMesh> m);
   void find_entries(const RayFrame& f, const float* scalars, std::vector<Entry>& out) const;
@@ -154,6 +155,7 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
     boxes.push_back(box);
   }
   bvh = detail::Bvh(boxes, 1e-9 * std::max(tm.bounds.diagonal(), 1e-300), 4);
+  reentry_slack = 1e-9 * tm.bounds.diagonal();
 }
 
 void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, std::vector<Entry>& out) const {
@@ -302,8 +304,11 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const float* scalars, cons
   find_entries(f, scalars, entries);
   double done = -std::numeric_limits<double>::infinity();
   for (const Entry& e : entries) {
-    // An entry before the last exit lies on a stretch already walked (a grazing touch).
-    if (e.t < done) continue;
+    // An entry before the last exit lies on a stretch already walked (a grazing touch). The
+    // slack keeps a re-entry at the same depth: in a non-conforming mesh (hanging nodes) the
+    // walk leaves a big tet through an unmatched face and the small tets behind it are entered
+    // through their own unmatched faces, whose depth may round a few ulps below the exit's.
+    if (e.t < done - reentry_slack) continue;
     done = walk(f, scalars, tf, e, stop_transmittance, acc, stats);
     if (acc.transmittance < stop_transmittance) break;
   }
