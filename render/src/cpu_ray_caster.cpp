@@ -9,6 +9,7 @@
 
 #include "bvh.h"
 #include "penumbra/core/error.h"
+#include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
 #include "ray_frame.h"
 #include "tf_table.h"
@@ -319,20 +320,9 @@ CpuRayCaster::~CpuRayCaster() = default;
 
 const TetMesh& CpuRayCaster::mesh() const { return *m_impl->mesh; }
 
-namespace {
-
-void check_inputs(const char* call, const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf) {
-  require(scalars.size() == mesh.points.size(), std::string(call) + ": scalars has " + std::to_string(scalars.size()) +
-                                                     " values but the mesh has " + std::to_string(mesh.points.size()) +
-                                                     " points; expected one value per point");
-  tf.validate();
-}
-
-}  // namespace
-
 Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) const {
-  check_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf);
+  detail::check_render_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf);
   require(camera.width > 0 && camera.height > 0, "CpuRayCaster::render: camera image size " +
                                                      std::to_string(camera.width) + "x" + std::to_string(camera.height) +
                                                      "; expected positive width and height");
@@ -366,7 +356,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
 }
 
 RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFunction& tf, const Ray& ray) const {
-  check_inputs("CpuRayCaster::trace", *m_impl->mesh, scalars, tf);
+  detail::check_render_inputs("CpuRayCaster::trace", *m_impl->mesh, scalars, tf);
   const double len = length(ray.direction);
   require(std::isfinite(len) && len > 0, "CpuRayCaster::trace: ray direction is zero or not finite");
   const TfTable table(tf);

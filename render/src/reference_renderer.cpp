@@ -13,6 +13,7 @@
 
 #include "bvh.h"
 #include "penumbra/core/error.h"
+#include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/cpu_ray_caster.h"
 
@@ -201,18 +202,11 @@ RayTrace integrate_intervals(const TetMesh& mesh, const std::vector<float>& scal
   return out;
 }
 
-void check_inputs(const char* call, const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf) {
-  require(scalars.size() == mesh.points.size(), std::string(call) + ": scalars has " + std::to_string(scalars.size()) +
-                                                     " values but the mesh has " + std::to_string(mesh.points.size()) +
-                                                     " points; expected one value per point");
-  tf.validate();
-}
-
 }  // namespace
 
 RayTrace trace_reference(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf,
                          const Ray& ray) {
-  check_inputs("trace_reference", mesh, scalars, tf);
+  detail::check_render_inputs("trace_reference", mesh, scalars, tf);
   const RefRay r(ray);
   std::vector<Interval> iv;
   Interval i{};
@@ -223,7 +217,7 @@ RayTrace trace_reference(const TetMesh& mesh, const std::vector<float>& scalars,
 
 Image render_reference(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf,
                        const Camera& camera) {
-  check_inputs("render_reference", mesh, scalars, tf);
+  detail::check_render_inputs("render_reference", mesh, scalars, tf);
   std::vector<Bounds> boxes(mesh.tets.size());
   for (std::size_t t = 0; t < boxes.size(); ++t)
     for (int k = 0; k < 4; ++k) boxes[t].extend(mesh.points[static_cast<std::size_t>(mesh.tets[t][k])]);
