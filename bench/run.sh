@@ -13,6 +13,7 @@ usage() {
   echo "usage: bench/run.sh NAME" >&2
   echo "  NAME: render  (Penumbra CPU ray caster vs vtkUnstructuredGridVolumeRayCastMapper and" >&2
   echo "                 vtkUnstructuredGridVolumeZSweepMapper, 512x512, ~1M tets)" >&2
+  for f in "${root:-.}"/bench/*/bench.sh; do [ -f "$f" ] && sed -n 's/^# usage: /  /p' "$f" >&2; done
   exit 2
 }
 
@@ -65,7 +66,13 @@ bench_render() {
   done
 }
 
-case "$name" in
-  render) bench_render | tee "$build/render.jsonl" ;;
-  *) echo "bench/run.sh: unknown benchmark '$name'" >&2; usage ;;
-esac
+# Every other benchmark lives in bench/NAME/bench.sh, which defines bench_NAME using the helpers
+# above (build_targets, log, $build, $data, $frames).
+if [ "$name" != render ]; then
+  [[ "$name" =~ ^[a-z0-9_-]+$ ]] && [ -f "$root/bench/$name/bench.sh" ] \
+    || { echo "bench/run.sh: unknown benchmark '$name'" >&2; usage; }
+  # shellcheck source=/dev/null
+  source "$root/bench/$name/bench.sh"
+fi
+mkdir -p "$build"
+"bench_${name//-/_}" | tee "$build/$name.jsonl"
