@@ -114,5 +114,14 @@ TEST(TfTable, EmptyRangesAndNanSegments) {
   EXPECT_EQ(acc.optical_depth, 0.0);
 }
 
+TEST(SegmentIntegral, SmallExponentPolynomialMatchesExp) {
+  // Used for the transmittance of thin segments: within 2 rounding units of exp on its whole
+  // domain [0, 0.02], including the switch point.
+  for (int i = 0; i <= 2000; ++i) {
+    const double x = 0.02 * i / 2000.0;
+    EXPECT_NEAR(exp_neg_small(x), std::exp(-x), 4.5e-16) << "x=" << x;
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::render::detail
