@@ -3,6 +3,7 @@
 #include "penumbra/render/cpu_ray_caster.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -18,6 +19,7 @@ namespace penumbra::render {
 namespace {
 
 using detail::Composite;
+using detail::Modulation;
 using detail::edge_sign;
 using detail::edge_value;
 using detail::Projected;
@@ -47,6 +49,7 @@ struct BoundaryTriangle {
 struct Entry {
   double t, s;
   std::int32_t tet, face;
+  double light[3];  // L(x) at the entry point (shaded renders only)
 };
 
 struct WalkStats {
@@ -54,6 +57,39 @@ struct WalkStats {
   int segments = 0;
   int entries = 0;
   int aborted = 0;
+};
+
+// What a shaded render needs per frame: unit scalar gradients per walk tet (w = 1 where the
+// gradient exists, 0 where it vanishes or a vertex has no data) and the light field.
+struct ShadeContext {
+  std::vector<std::array<float, 4>> normals;
+  const float* light_rgb = nullptr;  // 3 per point, original point ids; null: L = 1
+  Shading shading;
+  bool headlight = true;
+  Vec3d to_light{0, 0, 0};
+
+  // The Phong factor of a tet seen along unit direction d. A vanishing gradient (a constant
+  // field) has no orientation: it is lit as if facing the light, without a highlight.
+  double phong(std::int32_t tet, const Vec3d& d) const {
+    if (shading.model == LightingModel::none) return 1.0;
+    const auto& n = normals[static_cast<std::size_t>(tet)];
+    if (n[3] == 0.0f) return shading.ambient + shading.diffuse;
+    const Vec3d normal{n[0], n[1], n[2]}, view = -d;
+    const Vec3d l = headlight ? view : to_light;
+    Vec3d h = l + view;
+    const double hl = length(h);
+    h = hl > 0 ? h / hl : l;
+    // Two-sided: an iso-surface is lit from either side.
+    return shading.ambient + shading.diffuse * std::fabs(dot(normal, l)) +
+           shading.specular * std::pow(std::fabs(dot(normal, h)), shading.shininess);
+  }
+
+  void light_at(std::int32_t point, double out[3]) const {
+    for (int c = 0; c < 3; ++c) {
+      const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point) + c] : 1.0f;
+      out[c] = std::isfinite(v) ? v : 0.0;
+    }
+  }
 };
 
 constexpr int kMaxZeroLengthSteps = 1024;
@@ -105,11 +141,15 @@ struct CpuRayCaster::Impl {
   double reentry_slack = 0;  // depth tolerance for re-entering at an exit (see trace_ray)
 
   explicit Impl(std::shared_ptr<const TetMesh> m);
-  void find_entries(const RayFrame& f, const float* scalars, std::vector<Entry>& out) const;
-  double walk(const RayFrame& f, const float* scalars, const TfTable& tf, const Entry& entry, double stop_transmittance,
-              Composite& acc, WalkStats& stats) const;
-  void trace_ray(const RayFrame& f, const float* scalars, const TfTable& tf, double stop_transmittance,
-                 std::vector<Entry>& entries, Composite& acc, WalkStats& stats) const;
+  void find_entries(const RayFrame& f, const float* scalars, const ShadeContext* shade, std::vector<Entry>& out) const;
+  // kShaded: the emitted colour is modulated by `shade` (null otherwise); a separate
+  // instantiation keeps the unshaded walk free of it.
+  template <bool kShaded>
+  double walk(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
+              const Entry& entry, double stop_transmittance, Composite& acc, WalkStats& stats) const;
+  void trace_ray(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
+                 double stop_transmittance, std::vector<Entry>& entries, Composite& acc, WalkStats& stats) const;
+  ShadeContext shade_context(const float* scalars, const Shading& shading) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -159,7 +199,8 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   reentry_slack = 1e-9 * tm.bounds.diagonal();
 }
 
-void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, std::vector<Entry>& out) const {
+void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, const ShadeContext* shade,
+                                      std::vector<Entry>& out) const {
   out.clear();
   const auto& pts = mesh->points;
   constexpr double inf = std::numeric_limits<double>::infinity();
@@ -191,6 +232,11 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, s
     en.s = (w[0] * scalars[tri.v[0]] + w[1] * scalars[tri.v[1]] + w[2] * scalars[tri.v[2]]) / sum;
     en.tet = tri.tet;
     en.face = tri.face;
+    if (shade != nullptr) {
+      double l[3][3];
+      for (int j = 0; j < 3; ++j) shade->light_at(tri.v[j], l[j]);
+      for (int c = 0; c < 3; ++c) en.light[c] = (w[0] * l[0][c] + w[1] * l[1][c] + w[2] * l[2][c]) / sum;
+    }
     out.push_back(en);
   });
   // Usually one or two entries: insertion sort.
@@ -199,12 +245,15 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, s
 }
 
 // Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
-double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const TfTable& tf, const Entry& entry,
-                                double stop_transmittance, Composite& acc, WalkStats& stats) const {
+template <bool kShaded>
+double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
+                                const Entry& entry, double stop_transmittance, Composite& acc,
+                                WalkStats& stats) const {
   const auto& pts = mesh->points;
   std::int32_t tet = entry.tet;
   int k = entry.face;
   double t_in = entry.t, s_in = entry.s;
+  double l_in[3] = {entry.light[0], entry.light[1], entry.light[2]}, l_out[3] = {0, 0, 0};
   int p_in = std::isnan(s_in) ? -1 : tf.piece(s_in);  // transfer-function piece, -1 for NaN
   const double length_before = stats.length;
   int zero_steps = 0;
@@ -253,6 +302,15 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
       const double inv = 1.0 / sum;
       t_out = (wd * q[0].depth + wx * q[x].depth + wy * q[y].depth) * inv;
       s_out = (wd * scalars[id[0]] + wx * scalars[id[x]] + wy * scalars[id[y]]) * inv;
+      if constexpr (kShaded) {
+        double ld[3], lx[3], ly[3];
+        shade->light_at(id[0], ld);
+        shade->light_at(id[x], lx);
+        shade->light_at(id[y], ly);
+        for (int c = 0; c < 3; ++c) l_out[c] = (wd * ld[c] + wx * lx[c] + wy * ly[c]) * inv;
+      }
+    } else if constexpr (kShaded) {
+      for (int c = 0; c < 3; ++c) l_out[c] = l_in[c];
     }
     const int p_out = std::isnan(s_out) ? -1 : tf.piece_near(s_out, p_in);
     if (t_out <= t_in) {
@@ -264,17 +322,29 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     } else {
       zero_steps = 0;
       // Only the part in front of the origin counts (the eye may sit inside the mesh).
-      double t0 = t_in, s0 = s_in;
+      double t0 = t_in, s0 = s_in, clip = 0.0;
       int p0 = p_in;
       if (t0 < 0.0 && t_out > 0.0) {
-        s0 = s_in + (s_out - s_in) * (-t_in / (t_out - t_in));
+        clip = -t_in / (t_out - t_in);
+        s0 = s_in + (s_out - s_in) * clip;
         t0 = 0.0;
         p0 = std::isnan(s0) ? -1 : tf.piece(s0);
       }
       if (t_out > t0 && t0 >= 0.0) {
         // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
-        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0)))
-          tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc);
+        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
+          if constexpr (kShaded) {
+            const double phong = shade->phong(tet, f.d);
+            Modulation mod;
+            for (int c = 0; c < 3; ++c) {
+              mod.front[c] = (l_in[c] + (l_out[c] - l_in[c]) * clip) * phong;
+              mod.back[c] = l_out[c] * phong;
+            }
+            tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc, &mod);
+          } else {
+            tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc);
+          }
+        }
         stats.length += t_out - t0;
         ++stats.segments;
         if (acc.transmittance < stop_transmittance) break;
@@ -283,6 +353,8 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     t_in = t_out;
     s_in = s_out;
     p_in = p_out;
+    if constexpr (kShaded)
+      for (int c = 0; c < 3; ++c) l_in[c] = l_out[c];
     face_id[0] = id[0];
     face_id[1] = id[x];
     face_id[2] = id[y];
@@ -300,9 +372,9 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
 }
 
 void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const float* scalars, const TfTable& tf,
-                                   double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
-                                   WalkStats& stats) const {
-  find_entries(f, scalars, entries);
+                                   const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries,
+                                   Composite& acc, WalkStats& stats) const {
+  find_entries(f, scalars, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
   for (const Entry& e : entries) {
     // An entry before the last exit lies on a stretch already walked (a grazing touch). The
@@ -310,9 +382,44 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const float* scalars, cons
     // walk leaves a big tet through an unmatched face and the small tets behind it are entered
     // through their own unmatched faces, whose depth may round a few ulps below the exit's.
     if (e.t < done - reentry_slack) continue;
-    done = walk(f, scalars, tf, e, stop_transmittance, acc, stats);
+    done = shade != nullptr ? walk<true>(f, scalars, tf, shade, e, stop_transmittance, acc, stats)
+                            : walk<false>(f, scalars, tf, nullptr, e, stop_transmittance, acc, stats);
     if (acc.transmittance < stop_transmittance) break;
   }
+}
+
+ShadeContext CpuRayCaster::Impl::shade_context(const float* scalars, const Shading& shading) const {
+  ShadeContext sc;
+  sc.shading = shading;
+  if (shading.model == LightingModel::light_volume) sc.light_rgb = shading.light_rgb->data();
+  const double dl = length(shading.light_direction);
+  sc.headlight = !(dl > 0);
+  if (!sc.headlight) sc.to_light = shading.light_direction / dl;
+  if (shading.model == LightingModel::none) return sc;
+  // The scalar is linear in a tet: its gradient is constant there, the sum over the faces'
+  // area vectors weighted by the opposite value differences (divided by 6 x volume, which only
+  // scales it: the direction is all Phong needs).
+  const auto& pts = mesh->points;
+  sc.normals.resize(tets.size());
+  parallel_for(tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const WalkTet& w = tets[i];
+      const Vec3d p0 = pts[static_cast<std::size_t>(w.v[0])];
+      const Vec3d e1 = pts[static_cast<std::size_t>(w.v[1])] - p0, e2 = pts[static_cast<std::size_t>(w.v[2])] - p0,
+                  e3 = pts[static_cast<std::size_t>(w.v[3])] - p0;
+      const double s0 = scalars[w.v[0]];
+      const Vec3d g = cross(e2, e3) * (scalars[w.v[1]] - s0) + cross(e3, e1) * (scalars[w.v[2]] - s0) +
+                      cross(e1, e2) * (scalars[w.v[3]] - s0);
+      const double gl = length(g);
+      auto& n = sc.normals[i];
+      if (std::isfinite(gl) && gl > 0) {
+        n = {static_cast<float>(g.x / gl), static_cast<float>(g.y / gl), static_cast<float>(g.z / gl), 1.0f};
+      } else {
+        n = {0.0f, 0.0f, 0.0f, 0.0f};
+      }
+    }
+  });
+  return sc;
 }
 
 CpuRayCaster::CpuRayCaster(std::shared_ptr<const TetMesh> mesh) : m_impl(std::make_unique<Impl>(std::move(mesh))) {}
@@ -330,7 +437,10 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   require(opacity > 0 && opacity <= 1, "CpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
                                            "; expected a value in (0, 1]");
   const double stop_transmittance = opacity >= 1.0 ? 0.0 : 1.0 - opacity;
+  options.shading.validate("CpuRayCaster::render", m_impl->mesh->points.size());
   const TfTable table(tf);
+  const bool shaded = options.shading.model != LightingModel::none;
+  const ShadeContext shade = shaded ? m_impl->shade_context(scalars.data(), options.shading) : ShadeContext{};
   Image image(camera.width, camera.height);
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
@@ -344,8 +454,8 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           const Ray ray = camera.primary_ray(x, y);
           Composite acc;
           WalkStats stats;
-          m_impl->trace_ray(RayFrame(ray.origin, ray.direction), scalars.data(), table, stop_transmittance, entries, acc,
-                            stats);
+          m_impl->trace_ray(RayFrame(ray.origin, ray.direction), scalars.data(), table, shaded ? &shade : nullptr,
+                            stop_transmittance, entries, acc, stats);
           float* px = image.pixel(x, y);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
           px[3] = static_cast<float>(1.0 - acc.transmittance);
@@ -363,7 +473,8 @@ RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFu
   std::vector<Entry> entries;
   Composite acc;
   WalkStats stats;
-  m_impl->trace_ray(RayFrame(ray.origin, ray.direction / len), scalars.data(), table, 0.0, entries, acc, stats);
+  m_impl->trace_ray(RayFrame(ray.origin, ray.direction / len), scalars.data(), table, nullptr, 0.0, entries, acc,
+                    stats);
   RayTrace r;
   for (int c = 0; c < 3; ++c) r.rgba[c] = acc.rgb[c];
   r.rgba[3] = 1.0 - acc.transmittance;

@@ -16,6 +16,13 @@ struct Composite {
   double optical_depth = 0.0;
 };
 
+/// A factor on the emitted colour that runs linearly from `front` to `back` along a segment
+/// (shading: the light field times the Phong factor; see penumbra/render/shading.h).
+struct Modulation {
+  double front[3], back[3];
+  double at(int c, double fraction) const { return front[c] + (back[c] - front[c]) * fraction; }
+};
+
 /// The transfer function cut at its breakpoints x_0 < ... < x_{n-1} into n + 1 pieces: piece p
 /// covers [x_{p-1}, x_p] (pieces 0 and n are the clamped ends), where extinction and colour are
 /// exactly linear in the scalar: tau(s) = tau0[p] + tau1[p] s, likewise colour.
@@ -85,11 +92,13 @@ public:
     integrate(s0, piece(s0), s1, piece(s1), length, acc);
   }
 
-  /// As above with the pieces of s0 and s1 already known (neither s is NaN).
-  void integrate(double s0, int p0, double s1, int p1, double length, Composite& acc) const {
+  /// As above with the pieces of s0 and s1 already known (neither s is NaN), the emitted colour
+  /// optionally multiplied by `mod`.
+  [[gnu::always_inline]] inline void integrate(double s0, int p0, double s1, int p1, double length, Composite& acc,
+                                               const Modulation* mod = nullptr) const {
     if (!(length > 0.0)) return;
     if (p0 == p1) {
-      integrate_in_piece(m_pieces[static_cast<std::size_t>(p0)], s0, s1, length, acc);
+      integrate_in_piece(m_pieces[static_cast<std::size_t>(p0)], s0, s1, length, acc, mod, 0.0, 1.0);
       return;
     }
     // Cut at every breakpoint between s0 and s1; the distance is linear in the scalar.
@@ -100,7 +109,7 @@ public:
       const bool last = p == p1;
       const double sb = last ? s1 : m_x[static_cast<std::size_t>(step > 0 ? p : p - 1)];
       const double fb = last ? 1.0 : (sb - s0) * inv_ds;
-      integrate_in_piece(m_pieces[static_cast<std::size_t>(p)], sa, sb, (fb - fa) * length, acc);
+      integrate_in_piece(m_pieces[static_cast<std::size_t>(p)], sa, sb, (fb - fa) * length, acc, mod, fa, fb);
       if (last) break;
       sa = sb;
       fa = fb;
@@ -113,13 +122,23 @@ private:
     bool empty = true;
   };
 
-  static void integrate_in_piece(const Piece& q, double sa, double sb, double length, Composite& acc) {
+  // [fa, fb]: where the piece lies along the whole segment, for the modulation.
+  // Always inlined: it is the walk's innermost work, and the unmodulated call sites fold the
+  // modulation away.
+  [[gnu::always_inline]] static inline void integrate_in_piece(const Piece& q, double sa, double sb, double length,
+                                                               Composite& acc, const Modulation* mod, double fa,
+                                                               double fb) {
     if (q.empty || !(length > 0.0)) return;
     const double a = std::max(0.0, q.tau0 + q.tau1 * sa) * length;
     const double b = std::max(0.0, q.tau0 + q.tau1 * sb) * length;
     if (a == 0.0 && b == 0.0) return;
-    const double cf[3] = {q.col0[0] + q.col1[0] * sa, q.col0[1] + q.col1[1] * sa, q.col0[2] + q.col1[2] * sa};
-    const double cb[3] = {q.col0[0] + q.col1[0] * sb, q.col0[1] + q.col1[1] * sb, q.col0[2] + q.col1[2] * sb};
+    double cf[3] = {q.col0[0] + q.col1[0] * sa, q.col0[1] + q.col1[1] * sa, q.col0[2] + q.col1[2] * sa};
+    double cb[3] = {q.col0[0] + q.col1[0] * sb, q.col0[1] + q.col1[1] * sb, q.col0[2] + q.col1[2] * sb};
+    if (mod != nullptr)
+      for (int c = 0; c < 3; ++c) {
+        cf[c] *= mod->at(c, fa);
+        cb[c] *= mod->at(c, fb);
+      }
     const PieceResult r = integrate_piece(a, b, cf, cb);
     for (int c = 0; c < 3; ++c) acc.rgb[c] += acc.transmittance * r.rgb[c];
     acc.transmittance *= r.transmittance;

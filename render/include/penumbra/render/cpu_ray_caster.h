@@ -5,6 +5,7 @@
 
 #include "penumbra/render/camera.h"
 #include "penumbra/render/image.h"
+#include "penumbra/render/shading.h"
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
@@ -14,6 +15,8 @@ namespace penumbra::render {
 struct RenderOptions {
   /// Rays stop once accumulated opacity exceeds this (1 disables early termination).
   double early_termination_opacity = 0.999;
+  /// Lighting of the emitted colour (emission only by default).
+  Shading shading;
 };
 
 /// Per-ray result, for tests and diagnostics.

@@ -1,0 +1,39 @@
+// render/include/penumbra/render/shading.h -- how samples are lit: emission only, gradient
+// Phong, or Phong times a light volume L(x) (Shih, Zhang & Ma, eq. 3)
+#pragma once
+#include <vector>
+
+#include "penumbra/core/vec3.h"
+
+namespace penumbra::render {
+
+enum class LightingModel {
+  none,          ///< emission-absorption: the transfer function's colour as is
+  phong,         ///< colour x (ambient + diffuse + specular) from the scalar gradient
+  light_volume,  ///< colour x L(x) x (ambient + diffuse + specular); L per point (light_rgb)
+};
+
+/// Shading of the emitted colour. The scalar is linear in a tet, so its gradient (the normal) and
+/// the Phong factor are constant along each tet segment; L(x) is interpolated linearly from the
+/// points like the scalar. The emission c(s) L(x) is then the product of two linear functions;
+/// a segment integrates it as the linear function through its end values, which is exact when
+/// either factor is constant and otherwise differs by O(segment length^2) of the change in L.
+struct Shading {
+  LightingModel model = LightingModel::none;
+  /// Light colour field L, 3 floats (r, g, b) per mesh point; required for light_volume and
+  /// ignored otherwise. Non-finite values count as no light (0).
+  const std::vector<float>* light_rgb = nullptr;
+  /// Unit direction towards the key light for the diffuse and specular terms, in world space;
+  /// the zero vector means a headlight (towards the eye, per ray).
+  Vec3d light_direction{0, 0, 0};
+  double ambient = 0.35;
+  double diffuse = 0.55;
+  double specular = 0.25;
+  double shininess = 24.0;
+
+  /// Throws Error(invalid_argument) naming `call` for a light field of the wrong size, a missing
+  /// one, negative coefficients or a direction that is neither zero nor finite.
+  void validate(const char* call, std::size_t point_count) const;
+};
+
+}  // namespace penumbra::render
