@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -14,6 +15,7 @@
 #include "penumbra/core/thread_pool.h"
 #include "ray_frame.h"
 #include "tf_table.h"
+#include "walk_geometry.h"
 
 namespace penumbra::render {
 namespace {
@@ -24,6 +26,10 @@ using detail::edge_sign;
 using detail::edge_value;
 using detail::Projected;
 using detail::RayFrame;
+using detail::RayGeometry;
+using detail::ScreenBasis;
+using detail::ScreenGeometry;
+using detail::ScreenPoint;
 using detail::TfTable;
 
 // Face k (opposite vertex k) listed with its normal pointing out of a positive tet.
@@ -141,14 +147,24 @@ struct CpuRayCaster::Impl {
   double reentry_slack = 0;  // depth tolerance for re-entering at an exit (see trace_ray)
 
   explicit Impl(std::shared_ptr<const TetMesh> m);
-  void find_entries(const RayFrame& f, const float* scalars, const ShadeContext* shade, std::vector<Entry>& out) const;
+  // Geometry: RayGeometry or ScreenGeometry (walk_geometry.h). `f` is the ray itself, for the
+  // BVH and the shading.
+  template <class Geometry>
+  void find_entries(const RayFrame& f, const Geometry& geo, const float* scalars, const ShadeContext* shade,
+                    std::vector<Entry>& out) const;
   // kShaded: the emitted colour is modulated by `shade` (null otherwise); a separate
   // instantiation keeps the unshaded walk free of it.
-  template <bool kShaded>
-  double walk(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
-              const Entry& entry, double stop_transmittance, Composite& acc, WalkStats& stats) const;
-  void trace_ray(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
-                 double stop_transmittance, std::vector<Entry>& entries, Composite& acc, WalkStats& stats) const;
+  template <bool kShaded, class Geometry>
+  double walk(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+              const ShadeContext* shade, const Entry& entry, double stop_transmittance, Composite& acc,
+              WalkStats& stats) const;
+  template <class Geometry>
+  void trace_ray(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+                 const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
+                 WalkStats& stats) const;
+  // Screen coordinates of every point for `camera`; empty when some point is not in front of
+  // the eye (the frame then uses RayGeometry).
+  std::vector<ScreenPoint> screen_points(const ScreenBasis& basis) const;
   ShadeContext shade_context(const float* scalars, const Shading& shading) const;
 };
 
@@ -199,10 +215,10 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   reentry_slack = 1e-9 * tm.bounds.diagonal();
 }
 
-void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, const ShadeContext* shade,
-                                      std::vector<Entry>& out) const {
+template <class Geometry>
+void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, const float* scalars,
+                                      const ShadeContext* shade, std::vector<Entry>& out) const {
   out.clear();
-  const auto& pts = mesh->points;
   constexpr double inf = std::numeric_limits<double>::infinity();
   // Entries behind the origin matter only when the origin may be inside the mesh (the walk from
   // such an entry reaches t = 0 inside); from outside the bounds every stretch inside the mesh
@@ -215,7 +231,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, c
   bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, [&](std::int32_t i) {
     const BoundaryTriangle& tri = triangles[static_cast<std::size_t>(i)];
     Projected q[3];
-    for (int j = 0; j < 3; ++j) q[j] = f.project(pts[static_cast<std::size_t>(tri.v[j])]);
+    for (int j = 0; j < 3; ++j) q[j] = geo.at(tri.v[j]);
     double e[3];  // e[j]: edge v[j] -> v[j+1]
     for (int j = 0; j < 3; ++j) {
       const int n = j == 2 ? 0 : j + 1;
@@ -225,17 +241,17 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, c
     }
     // Barycentric weight of a vertex: the opposite edge's value.
     const double w[3] = {std::max(0.0, -e[1]), std::max(0.0, -e[2]), std::max(0.0, -e[0])};
-    const double sum = w[0] + w[1] + w[2];
-    if (!(sum > 0)) return;
+    if (!(w[0] + w[1] + w[2] > 0)) return;
+    const detail::FacePoint fp = geo.interpolate(w, q[0], q[1], q[2]);
     Entry en;
-    en.t = (w[0] * q[0].depth + w[1] * q[1].depth + w[2] * q[2].depth) / sum;
-    en.s = (w[0] * scalars[tri.v[0]] + w[1] * scalars[tri.v[1]] + w[2] * scalars[tri.v[2]]) / sum;
+    en.t = fp.t;
+    en.s = fp.mu[0] * scalars[tri.v[0]] + fp.mu[1] * scalars[tri.v[1]] + fp.mu[2] * scalars[tri.v[2]];
     en.tet = tri.tet;
     en.face = tri.face;
     if (shade != nullptr) {
       double l[3][3];
       for (int j = 0; j < 3; ++j) shade->light_at(tri.v[j], l[j]);
-      for (int c = 0; c < 3; ++c) en.light[c] = (w[0] * l[0][c] + w[1] * l[1][c] + w[2] * l[2][c]) / sum;
+      for (int c = 0; c < 3; ++c) en.light[c] = fp.mu[0] * l[0][c] + fp.mu[1] * l[1][c] + fp.mu[2] * l[2][c];
     }
     out.push_back(en);
   });
@@ -245,11 +261,10 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const float* scalars, c
 }
 
 // Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
-template <bool kShaded>
-double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const TfTable& tf, const ShadeContext* shade,
-                                const Entry& entry, double stop_transmittance, Composite& acc,
-                                WalkStats& stats) const {
-  const auto& pts = mesh->points;
+template <bool kShaded, class Geometry>
+double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+                                const ShadeContext* shade, const Entry& entry, double stop_transmittance,
+                                Composite& acc, WalkStats& stats) const {
   std::int32_t tet = entry.tet;
   int k = entry.face;
   double t_in = entry.t, s_in = entry.s;
@@ -266,13 +281,17 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     // The entry face is the previous tet's exit face: reuse its projections (bit-identical to
     // projecting again); only a welded duplicate point (another id) is projected anew.
     Projected q[4];
-    q[0] = f.project(pts[static_cast<std::size_t>(id[0])]);
+    q[0] = geo.at(id[0]);
     for (int j = 1; j < 4; ++j) {
-      const bool m0 = id[j] == face_id[0], m1 = id[j] == face_id[1], m2 = id[j] == face_id[2];
-      if (m0 | m1 | m2) [[likely]]
-        q[j] = face_q[static_cast<int>(m1) + 2 * static_cast<int>(m2)];  // index, not branches
-      else
-        q[j] = f.project(pts[static_cast<std::size_t>(id[j])]);
+      if constexpr (Geometry::kReuseFace) {
+        const bool m0 = id[j] == face_id[0], m1 = id[j] == face_id[1], m2 = id[j] == face_id[2];
+        if (m0 | m1 | m2) [[likely]]
+          q[j] = face_q[static_cast<int>(m1) + 2 * static_cast<int>(m2)];  // index, not branches
+        else
+          q[j] = geo.at(id[j]);
+      } else {
+        q[j] = geo.at(id[j]);
+      }
     }
     double e_d[4];  // e(D, X) for X = A, B, C at 1..3
     int pattern = 0;
@@ -293,21 +312,18 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     if (next >= 0) __builtin_prefetch(&tets[static_cast<std::size_t>(next >> 2)]);
     double wd = edge_value(q[x], id[x], q[y], id[y]);
     double wx = -e_d[y], wy = e_d[x];
-    wd = std::max(0.0, wd);
-    wx = std::max(0.0, wx);
-    wy = std::max(0.0, wy);
-    const double sum = wd + wx + wy;
+    const double w3[3] = {std::max(0.0, wd), std::max(0.0, wx), std::max(0.0, wy)};
     double t_out = t_in, s_out = s_in;
-    if (sum > 0) {
-      const double inv = 1.0 / sum;
-      t_out = (wd * q[0].depth + wx * q[x].depth + wy * q[y].depth) * inv;
-      s_out = (wd * scalars[id[0]] + wx * scalars[id[x]] + wy * scalars[id[y]]) * inv;
+    if (w3[0] + w3[1] + w3[2] > 0) {
+      const detail::FacePoint fp = geo.interpolate(w3, q[0], q[x], q[y]);
+      t_out = fp.t;
+      s_out = fp.mu[0] * scalars[id[0]] + fp.mu[1] * scalars[id[x]] + fp.mu[2] * scalars[id[y]];
       if constexpr (kShaded) {
         double ld[3], lx[3], ly[3];
         shade->light_at(id[0], ld);
         shade->light_at(id[x], lx);
         shade->light_at(id[y], ly);
-        for (int c = 0; c < 3; ++c) l_out[c] = (wd * ld[c] + wx * lx[c] + wy * ly[c]) * inv;
+        for (int c = 0; c < 3; ++c) l_out[c] = fp.mu[0] * ld[c] + fp.mu[1] * lx[c] + fp.mu[2] * ly[c];
       }
     } else if constexpr (kShaded) {
       for (int c = 0; c < 3; ++c) l_out[c] = l_in[c];
@@ -355,12 +371,14 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
     p_in = p_out;
     if constexpr (kShaded)
       for (int c = 0; c < 3; ++c) l_in[c] = l_out[c];
-    face_id[0] = id[0];
-    face_id[1] = id[x];
-    face_id[2] = id[y];
-    face_q[0] = q[0];
-    face_q[1] = q[x];
-    face_q[2] = q[y];
+    if constexpr (Geometry::kReuseFace) {
+      face_id[0] = id[0];
+      face_id[1] = id[x];
+      face_id[2] = id[y];
+      face_q[0] = q[0];
+      face_q[1] = q[x];
+      face_q[2] = q[y];
+    }
     if (next < 0) break;
     tet = next >> 2;
     k = next & 3;
@@ -371,10 +389,11 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const float* scalars, const T
   return t_in;
 }
 
-void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const float* scalars, const TfTable& tf,
+template <class Geometry>
+void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
                                    const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries,
                                    Composite& acc, WalkStats& stats) const {
-  find_entries(f, scalars, shade, entries);
+  find_entries(f, geo, scalars, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
   for (const Entry& e : entries) {
     // An entry before the last exit lies on a stretch already walked (a grazing touch). The
@@ -382,10 +401,29 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const float* scalars, cons
     // walk leaves a big tet through an unmatched face and the small tets behind it are entered
     // through their own unmatched faces, whose depth may round a few ulps below the exit's.
     if (e.t < done - reentry_slack) continue;
-    done = shade != nullptr ? walk<true>(f, scalars, tf, shade, e, stop_transmittance, acc, stats)
-                            : walk<false>(f, scalars, tf, nullptr, e, stop_transmittance, acc, stats);
+    done = shade != nullptr ? walk<true>(f, geo, scalars, tf, shade, e, stop_transmittance, acc, stats)
+                            : walk<false>(f, geo, scalars, tf, nullptr, e, stop_transmittance, acc, stats);
     if (acc.transmittance < stop_transmittance) break;
   }
+}
+
+std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& basis) const {
+  const auto& pts = mesh->points;
+  std::vector<ScreenPoint> out(pts.size());
+  // A point at (or behind) the eye plane has no screen position; a margin of 1e-9 of the mesh
+  // size keeps 1/z finite and well away from overflow.
+  const double min_depth = 1e-9 * std::max(mesh->bounds.diagonal(), 1e-300);
+  std::atomic<bool> all_in_front{true};
+  parallel_for(pts.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    bool ok = true;
+    for (std::size_t i = b; i < e; ++i) {
+      ok = ok && dot(pts[i] - basis.eye, basis.forward) > min_depth;
+      out[i] = basis.project(pts[i]);
+    }
+    if (!ok) all_in_front = false;
+  });
+  if (!all_in_front) out.clear();
+  return out;
 }
 
 ShadeContext CpuRayCaster::Impl::shade_context(const float* scalars, const Shading& shading) const {
@@ -442,6 +480,13 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const bool shaded = options.shading.model != LightingModel::none;
   const ShadeContext shade = shaded ? m_impl->shade_context(scalars.data(), options.shading) : ShadeContext{};
   Image image(camera.width, camera.height);
+  // With the whole mesh in front of the eye, projections are shared by all rays of the frame.
+  ScreenBasis basis;
+  basis.eye = camera.eye;
+  basis.forward = normalize(camera.target - camera.eye);
+  basis.right = normalize(cross(basis.forward, camera.up));
+  basis.down = cross(basis.forward, basis.right);
+  const std::vector<ScreenPoint> screen = m_impl->screen_points(basis);
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
@@ -454,8 +499,14 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           const Ray ray = camera.primary_ray(x, y);
           Composite acc;
           WalkStats stats;
-          m_impl->trace_ray(RayFrame(ray.origin, ray.direction), scalars.data(), table, shaded ? &shade : nullptr,
-                            stop_transmittance, entries, acc, stats);
+          const RayFrame frame(ray.origin, ray.direction);
+          if (screen.empty()) {
+            m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data()}, scalars.data(), table,
+                              shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
+          } else {
+            m_impl->trace_ray(frame, ScreenGeometry(screen.data(), basis, ray.direction), scalars.data(), table,
+                              shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
+          }
           float* px = image.pixel(x, y);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
           px[3] = static_cast<float>(1.0 - acc.transmittance);
@@ -473,8 +524,9 @@ RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFu
   std::vector<Entry> entries;
   Composite acc;
   WalkStats stats;
-  m_impl->trace_ray(RayFrame(ray.origin, ray.direction / len), scalars.data(), table, nullptr, 0.0, entries, acc,
-                    stats);
+  const RayFrame frame(ray.origin, ray.direction / len);
+  m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data()}, scalars.data(), table, nullptr, 0.0,
+                    entries, acc, stats);
   RayTrace r;
   for (int c = 0; c < 3; ++c) r.rgba[c] = acc.rgb[c];
   r.rgba[3] = 1.0 - acc.transmittance;

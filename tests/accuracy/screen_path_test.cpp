@@ -1,0 +1,82 @@
+// A frame whose camera sees the whole mesh in front of it walks with per-frame screen-space
+// projections (walk_geometry.h); a single traced ray always projects per ray. Both must give the
+// same picture, and a frame with the eye inside the mesh must fall back to per-ray projection.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scenes.h"
+
+namespace penumbra {
+namespace {
+
+using fixtures::BlockCells;
+
+render::TransferFunction banded_tf() {
+  render::TransferFunction tf;
+  tf.colors = {{-1.0, 0.1, 0.2, 0.9}, {0.0, 0.2, 0.9, 0.3}, {1.0, 1.0, 0.3, 0.1}};
+  tf.opacities = {{-1.0, 1.5}, {-0.2, 0.0}, {0.3, 3.0}, {1.0, 0.7}};
+  return tf;
+}
+
+// Largest difference between each pixel of a rendered frame and the ray traced through its
+// centre on its own.
+double max_difference_to_traced_rays(const fixtures::OwnedMesh& owned, const render::Camera& cam, int& covered) {
+  const auto mesh = test::prepare(owned);
+  render::CpuRayCaster caster(mesh);
+  const auto field = fixtures::sample(owned, [](double x, double y, double z) {
+    return std::sin(2.3 * x + 0.4) * std::cos(1.9 * y) + 0.5 * z - 0.3;
+  });
+  const std::vector<float> scalars(field.begin(), field.end());
+  const auto tf = banded_tf();
+  render::RenderOptions opts;
+  opts.early_termination_opacity = 1.0;  // trace() never stops early
+  const render::Image img = caster.render(scalars, tf, cam, opts);
+  double worst = 0;
+  covered = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const render::RayTrace r = caster.trace(scalars, tf, cam.primary_ray(x, y));
+      covered += r.rgba[3] > 0.05;
+      for (int c = 0; c < 4; ++c) worst = std::max(worst, std::fabs(img.pixel(x, y)[c] - r.rgba[c]));
+    }
+  return worst;
+}
+
+// Both paths walk the same tets and differ only in rounding (~1e-15 per segment); pixels are
+// floats, so 3e-7 is float rounding of values up to ~2 plus margin. A wrong exit or a
+// perspective error in the interpolation changes pixels by > 1e-3.
+constexpr double kTolerance = 3e-7;
+
+TEST(ScreenPath, MeshInFrontMatchesPerRayWalk) {
+  const auto owned = fixtures::tet_block_with_hole(9);
+  const auto mesh = test::prepare(owned);
+  int covered = 0;
+  // Oblique, and straight down the hole (rays through vertices, along edges and faces).
+  for (const auto& cam : {render::Camera::orbit(mesh->bounds, 37, 28, 35, 40, 32),
+                          render::Camera::look_at({0.5, 0.5, 3}, {0.5, 0.5, 0.5}, {0, 1, 0}, 30, 27, 27)}) {
+    EXPECT_LT(max_difference_to_traced_rays(owned, cam, covered), kTolerance);
+    EXPECT_GT(covered, 150);
+  }
+}
+
+TEST(ScreenPath, HexMeshSplitIntoTetsMatchesPerRayWalk) {
+  const auto owned = fixtures::block(BlockCells::hexes, 5, 4, 6, {-1, -1, -1}, {1, 0.5, 2});
+  const auto mesh = test::prepare(owned);
+  int covered = 0;
+  EXPECT_LT(max_difference_to_traced_rays(owned, render::Camera::orbit(mesh->bounds, -63, 17, 30, 36, 36), covered),
+            kTolerance);
+  EXPECT_GT(covered, 150);
+}
+
+TEST(ScreenPath, EyeInsideTheMeshFallsBackToPerRayProjection) {
+  // Half of the mesh lies behind the eye: screen coordinates do not exist for it.
+  const auto owned = fixtures::block(BlockCells::tets, 6, 6, 6, {0, 0, 0}, {1, 1, 1});
+  const auto cam = render::Camera::look_at({0.43, 0.51, 0.37}, {1.2, 0.8, 0.6}, {0, 0, 1}, 60, 24, 24);
+  int covered = 0;
+  EXPECT_LT(max_difference_to_traced_rays(owned, cam, covered), kTolerance);
+  EXPECT_EQ(covered, cam.width * cam.height);
+}
+
+}  // namespace
+}  // namespace penumbra
