@@ -150,21 +150,21 @@ struct CpuRayCaster::Impl {
   // Geometry: RayGeometry or ScreenGeometry (walk_geometry.h). `f` is the ray itself, for the
   // BVH and the shading.
   template <class Geometry>
-  void find_entries(const RayFrame& f, const Geometry& geo, const float* scalars, const ShadeContext* shade,
+  void find_entries(const RayFrame& f, const Geometry& geo, const ShadeContext* shade,
                     std::vector<Entry>& out) const;
   // kShaded: the emitted colour is modulated by `shade` (null otherwise); a separate
   // instantiation keeps the unshaded walk free of it.
   template <bool kShaded, class Geometry>
-  double walk(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+  double walk(const RayFrame& f, const Geometry& geo, const TfTable& tf,
               const ShadeContext* shade, const Entry& entry, double stop_transmittance, Composite& acc,
               WalkStats& stats) const;
   template <class Geometry>
-  void trace_ray(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+  void trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                  const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
                  WalkStats& stats) const;
   // Screen coordinates of every point for `camera`; empty when some point is not in front of
   // the eye (the frame then uses RayGeometry).
-  std::vector<ScreenPoint> screen_points(const ScreenBasis& basis) const;
+  std::vector<ScreenPoint> screen_points(const ScreenBasis& basis, const float* scalars) const;
   ShadeContext shade_context(const float* scalars, const Shading& shading) const;
 };
 
@@ -216,8 +216,8 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
 }
 
 template <class Geometry>
-void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, const float* scalars,
-                                      const ShadeContext* shade, std::vector<Entry>& out) const {
+void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, const ShadeContext* shade,
+                                      std::vector<Entry>& out) const {
   out.clear();
   constexpr double inf = std::numeric_limits<double>::infinity();
   // Entries behind the origin matter only when the origin may be inside the mesh (the walk from
@@ -245,7 +245,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     const detail::FacePoint fp = geo.interpolate(w, q[0], q[1], q[2]);
     Entry en;
     en.t = fp.t;
-    en.s = fp.mu[0] * scalars[tri.v[0]] + fp.mu[1] * scalars[tri.v[1]] + fp.mu[2] * scalars[tri.v[2]];
+    en.s = fp.mu[0] * geo.scalar(tri.v[0]) + fp.mu[1] * geo.scalar(tri.v[1]) + fp.mu[2] * geo.scalar(tri.v[2]);
     en.tet = tri.tet;
     en.face = tri.face;
     if (shade != nullptr) {
@@ -262,7 +262,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
 
 // Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
 template <bool kShaded, class Geometry>
-double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                                 const ShadeContext* shade, const Entry& entry, double stop_transmittance,
                                 Composite& acc, WalkStats& stats) const {
   std::int32_t tet = entry.tet;
@@ -317,7 +317,7 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const fl
     if (w3[0] + w3[1] + w3[2] > 0) {
       const detail::FacePoint fp = geo.interpolate(w3, q[0], q[x], q[y]);
       t_out = fp.t;
-      s_out = fp.mu[0] * scalars[id[0]] + fp.mu[1] * scalars[id[x]] + fp.mu[2] * scalars[id[y]];
+      s_out = fp.mu[0] * geo.scalar(id[0]) + fp.mu[1] * geo.scalar(id[x]) + fp.mu[2] * geo.scalar(id[y]);
       if constexpr (kShaded) {
         double ld[3], lx[3], ly[3];
         shade->light_at(id[0], ld);
@@ -390,10 +390,10 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const fl
 }
 
 template <class Geometry>
-void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const float* scalars, const TfTable& tf,
+void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                                    const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries,
                                    Composite& acc, WalkStats& stats) const {
-  find_entries(f, geo, scalars, shade, entries);
+  find_entries(f, geo, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
   for (const Entry& e : entries) {
     // An entry before the last exit lies on a stretch already walked (a grazing touch). The
@@ -401,13 +401,13 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const
     // walk leaves a big tet through an unmatched face and the small tets behind it are entered
     // through their own unmatched faces, whose depth may round a few ulps below the exit's.
     if (e.t < done - reentry_slack) continue;
-    done = shade != nullptr ? walk<true>(f, geo, scalars, tf, shade, e, stop_transmittance, acc, stats)
-                            : walk<false>(f, geo, scalars, tf, nullptr, e, stop_transmittance, acc, stats);
+    done = shade != nullptr ? walk<true>(f, geo, tf, shade, e, stop_transmittance, acc, stats)
+                            : walk<false>(f, geo, tf, nullptr, e, stop_transmittance, acc, stats);
     if (acc.transmittance < stop_transmittance) break;
   }
 }
 
-std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& basis) const {
+std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& basis, const float* scalars) const {
   const auto& pts = mesh->points;
   std::vector<ScreenPoint> out(pts.size());
   // A point at (or behind) the eye plane has no screen position; a margin of 1e-9 of the mesh
@@ -418,7 +418,7 @@ std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& ba
     bool ok = true;
     for (std::size_t i = b; i < e; ++i) {
       ok = ok && dot(pts[i] - basis.eye, basis.forward) > min_depth;
-      out[i] = basis.project(pts[i]);
+      out[i] = basis.project(pts[i], scalars[i]);
     }
     if (!ok) all_in_front = false;
   });
@@ -486,7 +486,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   basis.forward = normalize(camera.target - camera.eye);
   basis.right = normalize(cross(basis.forward, camera.up));
   basis.down = cross(basis.forward, basis.right);
-  const std::vector<ScreenPoint> screen = m_impl->screen_points(basis);
+  const std::vector<ScreenPoint> screen = m_impl->screen_points(basis, scalars.data());
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
@@ -501,10 +501,10 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           WalkStats stats;
           const RayFrame frame(ray.origin, ray.direction);
           if (screen.empty()) {
-            m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data()}, scalars.data(), table,
+            m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           } else {
-            m_impl->trace_ray(frame, ScreenGeometry(screen.data(), basis, ray.direction), scalars.data(), table,
+            m_impl->trace_ray(frame, ScreenGeometry(screen.data(), basis, ray.direction), table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           }
           float* px = image.pixel(x, y);
@@ -525,7 +525,7 @@ RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFu
   Composite acc;
   WalkStats stats;
   const RayFrame frame(ray.origin, ray.direction / len);
-  m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data()}, scalars.data(), table, nullptr, 0.0,
+  m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table, nullptr, 0.0,
                     entries, acc, stats);
   RayTrace r;
   for (int c = 0; c < 3; ++c) r.rgba[c] = acc.rgb[c];

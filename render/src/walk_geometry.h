@@ -31,11 +31,13 @@ struct FacePoint {
 struct RayGeometry {
   const RayFrame& frame;
   const Vec3d* points;
+  const float* scalars;
   /// The entry face's projections are reused on the next tet (projecting costs more than
   /// matching ids).
   static constexpr bool kReuseFace = true;
 
   Projected at(std::int32_t id) const { return frame.project(points[id]); }
+  double scalar(std::int32_t id) const { return scalars[id]; }
   /// `w`: the vertices' unnormalised barycentric weights (sum > 0) in the ray plane.
   FacePoint interpolate(const double w[3], const Projected& a, const Projected& b, const Projected& c) const {
     const double inv = 1.0 / (w[0] + w[1] + w[2]);
@@ -45,9 +47,10 @@ struct RayGeometry {
   }
 };
 
-/// A point on the image plane: X = x/z, Y = y/z and 1/z in the camera frame.
+/// A point on the image plane: X = x/z, Y = y/z and 1/z in the camera frame, with the point's
+/// scalar beside them so that a step reads one 32-byte record per point.
 struct ScreenPoint {
-  double x, y, inv_z;
+  double x, y, inv_z, s;
 };
 
 /// A camera's frame for screen coordinates: right, down-screen (so that right x down = forward,
@@ -55,12 +58,12 @@ struct ScreenPoint {
 struct ScreenBasis {
   Vec3d eye, right, down, forward;
 
-  /// Screen coordinates of `p`, or nullopt-like inv_z <= 0 when `p` is not in front of the eye.
-  ScreenPoint project(const Vec3d& p) const {
+  /// Screen coordinates of `p` (in front of the eye) with its scalar.
+  ScreenPoint project(const Vec3d& p, double scalar) const {
     const Vec3d r = p - eye;
     const double z = dot(r, forward);
     const double inv_z = 1.0 / z;
-    return {dot(r, right) * inv_z, dot(r, down) * inv_z, inv_z};
+    return {dot(r, right) * inv_z, dot(r, down) * inv_z, inv_z, scalar};
   }
 };
 
@@ -81,6 +84,7 @@ struct ScreenGeometry {
     const ScreenPoint& p = points[id];
     return {p.x - sx, p.y - sy, p.inv_z};
   }
+  double scalar(std::int32_t id) const { return points[id].s; }
   FacePoint interpolate(const double w[3], const Projected& a, const Projected& b, const Projected& c) const {
     const double m[3] = {w[0] * a.depth, w[1] * b.depth, w[2] * c.depth};
     const double inv = 1.0 / (m[0] + m[1] + m[2]);
