@@ -14,6 +14,7 @@
 #include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
 #include "ray_frame.h"
+#include "tet_order.h"
 #include "tf_table.h"
 #include "walk_geometry.h"
 
@@ -102,41 +103,6 @@ constexpr int kMaxZeroLengthSteps = 1024;
 // Relative to the mesh diagonal: stretches inside shorter than this are grazes, not entries.
 constexpr double kGrazeLength = 1e-12;
 
-// Spreads the low 21 bits of x to every third bit.
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
-// Tet ids sorted by the Morton code of their centroids.
-std::vector<std::int32_t> morton_order(const TetMesh& m) {
-  const Vec3d lo = m.bounds.lo, ext = m.bounds.hi - m.bounds.lo;
-  const double scale[3] = {ext.x > 0 ? 2097151.0 / ext.x : 0.0, ext.y > 0 ? 2097151.0 / ext.y : 0.0,
-                           ext.z > 0 ? 2097151.0 / ext.z : 0.0};
-  std::vector<std::pair<std::uint64_t, std::int32_t>> keyed(m.tets.size());
-  parallel_for(keyed.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
-      Vec3d c{0, 0, 0};
-      for (int k = 0; k < 4; ++k) c = c + m.points[static_cast<std::size_t>(m.tets[t][k])];
-      std::uint64_t code = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double g = std::clamp((c[a] * 0.25 - lo[a]) * scale[a], 0.0, 2097151.0);
-        code |= spread_bits(static_cast<std::uint64_t>(g)) << a;
-      }
-      keyed[t] = {code, static_cast<std::int32_t>(t)};
-    }
-  });
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<std::int32_t> order(keyed.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
-  return order;
-}
-
 }  // namespace
 
 struct CpuRayCaster::Impl {
@@ -176,7 +142,7 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
                                                      " tets; expected a mesh from prepare_tet_mesh");
   // Walk records in Morton order of the tet centroids, so that a tile of rays walking through a
   // region touches few cache lines whatever the input ordering.
-  const std::vector<std::int32_t> order = morton_order(tm);
+  const std::vector<std::int32_t> order = detail::morton_order(tm);
   std::vector<std::int32_t> rank(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
   tets.resize(tm.tets.size());
