@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include "bvh.h"
@@ -131,6 +132,12 @@ struct CpuRayCaster::Impl {
   // Screen coordinates of every point for `camera`; empty when some point is not in front of
   // the eye (the frame then uses RayGeometry).
   std::vector<ScreenPoint> screen_points(const ScreenBasis& basis, const float* scalars) const;
+  // Boundary faces per screen tile of `tile` pixels: those of tile i are
+  // faces[start[i]] .. faces[start[i + 1] - 1].
+  struct TileFaces {
+    std::vector<std::int32_t> start, faces;
+  };
+  TileFaces bin_faces(const std::vector<ScreenPoint>& screen, const Camera& camera, int tile) const;
   ShadeContext shade_context(const float* scalars, const Shading& shading) const;
 };
 
@@ -194,7 +201,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
   const Vec3d& o = f.origin;
   const bool outside = o.x < b.lo.x - pad || o.y < b.lo.y - pad || o.z < b.lo.z - pad || o.x > b.hi.x + pad ||
                        o.y > b.hi.y + pad || o.z > b.hi.z + pad;
-  bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, [&](std::int32_t i) {
+  auto test_face = [&](std::int32_t i) {
     const BoundaryTriangle& tri = triangles[static_cast<std::size_t>(i)];
     Projected q[3];
     for (int j = 0; j < 3; ++j) q[j] = geo.at(tri.v[j]);
@@ -220,7 +227,12 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
       for (int c = 0; c < 3; ++c) en.light[c] = fp.mu[0] * l[0][c] + fp.mu[1] * l[1][c] + fp.mu[2] * l[2][c];
     }
     out.push_back(en);
-  });
+  };
+  if constexpr (Geometry::kBinnedFaces) {
+    for (const std::int32_t* i = geo.faces_begin; i != geo.faces_end; ++i) test_face(*i);
+  } else {
+    bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, test_face);
+  }
   // Usually one or two entries: insertion sort.
   for (std::size_t i = 1; i < out.size(); ++i)
     for (std::size_t j = i; j > 0 && out[j].t < out[j - 1].t; --j) std::swap(out[j], out[j - 1]);
@@ -392,6 +404,57 @@ std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& ba
   return out;
 }
 
+CpuRayCaster::Impl::TileFaces CpuRayCaster::Impl::bin_faces(const std::vector<ScreenPoint>& screen,
+                                                             const Camera& camera, int tile) const {
+  const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
+  // Pixel (px, py) looks through image-plane point X = (2 (px + 0.5) / W - 1) half_w, and
+  // likewise for Y (down the screen): invert that for each face's corners.
+  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
+  const double half_w = half_h * camera.width / camera.height;
+  struct TileRange {
+    int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
+  };
+  std::vector<TileRange> ranges(triangles.size());
+  parallel_for(triangles.size(), 1 << 12, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
+      for (const std::int32_t v : triangles[i].v) {
+        const ScreenPoint& p = screen[static_cast<std::size_t>(v)];
+        const double px = (p.x / half_w + 1.0) * 0.5 * camera.width - 0.5;
+        const double py = (p.y / half_h + 1.0) * 0.5 * camera.height - 0.5;
+        lo_x = std::min(lo_x, px);
+        hi_x = std::max(hi_x, px);
+        lo_y = std::min(lo_y, py);
+        hi_y = std::max(hi_y, py);
+      }
+      // One pixel of margin: a ray through a face's corner or edge must find it whichever way
+      // the rounding of this estimate goes (the entry test itself is exact).
+      auto tile_of = [tile](double p, int count) {
+        return static_cast<int>(std::clamp(std::floor(p / tile), -1.0, static_cast<double>(count)));
+      };
+      TileRange& r = ranges[i];
+      r.x0 = std::max(0, tile_of(lo_x - 1.0, tiles_x));
+      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + 1.0, tiles_x));
+      r.y0 = std::max(0, tile_of(lo_y - 1.0, tiles_y));
+      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + 1.0, tiles_y));
+    }
+  });
+  TileFaces bins;
+  bins.start.assign(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
+  for (const TileRange& r : ranges)
+    for (int ty = r.y0; ty <= r.y1; ++ty)
+      for (int tx = r.x0; tx <= r.x1; ++tx) ++bins.start[static_cast<std::size_t>(ty) * tiles_x + tx + 1];
+  for (std::size_t i = 1; i < bins.start.size(); ++i) bins.start[i] += bins.start[i - 1];
+  bins.faces.resize(static_cast<std::size_t>(bins.start.back()));
+  std::vector<std::int32_t> fill(bins.start.begin(), bins.start.end() - 1);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    for (int ty = ranges[i].y0; ty <= ranges[i].y1; ++ty)
+      for (int tx = ranges[i].x0; tx <= ranges[i].x1; ++tx)
+        bins.faces[static_cast<std::size_t>(fill[static_cast<std::size_t>(ty) * tiles_x + tx]++)] =
+            static_cast<std::int32_t>(i);
+  return bins;
+}
+
 ShadeContext CpuRayCaster::Impl::shade_context(const float* scalars, const Shading& shading) const {
   ShadeContext sc;
   sc.shading = shading;
@@ -455,6 +518,12 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const std::vector<ScreenPoint> screen = m_impl->screen_points(basis, scalars.data());
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
+  // Boundary faces binned by small screen tiles replace the per-ray BVH search: a bin of a few
+  // pixels holds only the faces that may cover it, a handful at any resolution where faces
+  // span a few pixels or more.
+  constexpr int bin = 4;
+  const int bins_x = (camera.width + bin - 1) / bin;
+  const Impl::TileFaces bins = screen.empty() ? Impl::TileFaces{} : m_impl->bin_faces(screen, camera, bin);
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
     std::vector<Entry> entries;
     entries.reserve(64);
@@ -470,7 +539,12 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
             m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           } else {
-            m_impl->trace_ray(frame, ScreenGeometry(screen.data(), basis, ray.direction), table,
+            const std::int32_t* faces = bins.faces.data();
+            const std::size_t b = static_cast<std::size_t>(y / bin) * bins_x + static_cast<std::size_t>(x / bin);
+            m_impl->trace_ray(frame,
+                              ScreenGeometry(screen.data(), basis, ray.direction, faces + bins.start[b],
+                                             faces + bins.start[b + 1]),
+                              table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           }
           float* px = image.pixel(x, y);

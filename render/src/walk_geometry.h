@@ -32,6 +32,8 @@ struct RayGeometry {
   const RayFrame& frame;
   const Vec3d* points;
   const float* scalars;
+  /// Boundary faces come from the BVH along the ray.
+  static constexpr bool kBinnedFaces = false;
   /// The entry face's projections are reused on the next tet (projecting costs more than
   /// matching ids).
   static constexpr bool kReuseFace = true;
@@ -71,9 +73,16 @@ struct ScreenGeometry {
   const ScreenPoint* points;
   double sx, sy;        // the ray's point on the image plane
   double depth_scale;   // distance along the unit ray per unit of camera depth: 1 / (d . forward)
+  /// Boundary faces come from the frame's screen tiles: those whose projection may cover the
+  /// ray's tile (a superset of the faces the ray crosses).
+  static constexpr bool kBinnedFaces = true;
+  const std::int32_t* faces_begin = nullptr;
+  const std::int32_t* faces_end = nullptr;
   static constexpr bool kReuseFace = false;
 
-  ScreenGeometry(const ScreenPoint* pts, const ScreenBasis& basis, const Vec3d& unit_dir) : points(pts) {
+  ScreenGeometry(const ScreenPoint* pts, const ScreenBasis& basis, const Vec3d& unit_dir,
+                 const std::int32_t* faces_first, const std::int32_t* faces_last)
+      : points(pts), faces_begin(faces_first), faces_end(faces_last) {
     const double along = dot(unit_dir, basis.forward);
     sx = dot(unit_dir, basis.right) / along;
     sy = dot(unit_dir, basis.down) / along;
