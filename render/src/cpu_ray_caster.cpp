@@ -3,11 +3,8 @@
 #include "penumbra/render/cpu_ray_caster.h"
 
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
 
 #include "bvh.h"
@@ -15,9 +12,12 @@
 #include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
 #include "ray_frame.h"
+#include "screen_frame.h"
+#include "shade_context.h"
 #include "tet_order.h"
 #include "tf_table.h"
 #include "walk_geometry.h"
+#include "walk_mesh.h"
 
 namespace penumbra::render {
 namespace {
@@ -33,25 +33,15 @@ using detail::ScreenBasis;
 using detail::ScreenGeometry;
 using detail::ScreenPoint;
 using detail::TfTable;
+using detail::BoundaryTriangle;
+using detail::kFaceVertices;
+using detail::ShadeContext;
+using detail::WalkTet;
 
-// Face k (opposite vertex k) listed with its normal pointing out of a positive tet.
-constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 // Entered through face k, the other vertices A, B, C are ordered so that the three candidate
 // exit faces, listed outward, are (D,A,B), (D,B,C), (D,C,A) with D the vertex k: (k,A,B,C) is an
 // odd permutation of (0,1,2,3), like (3,0,1,2).
 constexpr int kAbc[4][3] = {{1, 3, 2}, {0, 2, 3}, {1, 0, 3}, {0, 1, 2}};
-
-// A tet for the walk: its points and, per face, the neighbour as (tet << 2 | face index of the
-// shared face in the neighbour), or -1 on the boundary. 32 bytes: two per cache line.
-struct WalkTet {
-  std::int32_t v[4];
-  std::int32_t next[4];
-};
-
-struct BoundaryTriangle {
-  std::int32_t v[3];  // outward order
-  std::int32_t tet, face;
-};
 
 // A boundary face where the ray enters the mesh.
 struct Entry {
@@ -65,39 +55,6 @@ struct WalkStats {
   int segments = 0;
   int entries = 0;
   int aborted = 0;
-};
-
-// What a shaded render needs per frame: unit scalar gradients per walk tet (w = 1 where the
-// gradient exists, 0 where it vanishes or a vertex has no data) and the light field.
-struct ShadeContext {
-  std::vector<std::array<float, 4>> normals;
-  const float* light_rgb = nullptr;  // 3 per point, original point ids; null: L = 1
-  Shading shading;
-  bool headlight = true;
-  Vec3d to_light{0, 0, 0};
-
-  // The Phong factor of a tet seen along unit direction d. A vanishing gradient (a constant
-  // field) has no orientation: it is lit as if facing the light, without a highlight.
-  double phong(std::int32_t tet, const Vec3d& d) const {
-    if (shading.model == LightingModel::none) return 1.0;
-    const auto& n = normals[static_cast<std::size_t>(tet)];
-    if (n[3] == 0.0f) return shading.ambient + shading.diffuse;
-    const Vec3d normal{n[0], n[1], n[2]}, view = -d;
-    const Vec3d l = headlight ? view : to_light;
-    Vec3d h = l + view;
-    const double hl = length(h);
-    h = hl > 0 ? h / hl : l;
-    // Two-sided: an iso-surface is lit from either side.
-    return shading.ambient + shading.diffuse * std::fabs(dot(normal, l)) +
-           shading.specular * std::pow(std::fabs(dot(normal, h)), shading.shininess);
-  }
-
-  void light_at(std::int32_t point, double out[3]) const {
-    for (int c = 0; c < 3; ++c) {
-      const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point) + c] : 1.0f;
-      out[c] = std::isfinite(v) ? v : 0.0;
-    }
-  }
 };
 
 constexpr int kMaxZeroLengthSteps = 1024;
@@ -129,16 +86,6 @@ struct CpuRayCaster::Impl {
   void trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                  const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
                  WalkStats& stats) const;
-  // Screen coordinates of every point for `camera`; empty when some point is not in front of
-  // the eye (the frame then uses RayGeometry).
-  std::vector<ScreenPoint> screen_points(const ScreenBasis& basis, const float* scalars) const;
-  // Boundary faces per screen tile of `tile` pixels: those of tile i are
-  // faces[start[i]] .. faces[start[i + 1] - 1].
-  struct TileFaces {
-    std::vector<std::int32_t> start, faces;
-  };
-  TileFaces bin_faces(const std::vector<ScreenPoint>& screen, const Camera& camera, int tile) const;
-  ShadeContext shade_context(const float* scalars, const Shading& shading) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -385,110 +332,6 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const
   }
 }
 
-std::vector<ScreenPoint> CpuRayCaster::Impl::screen_points(const ScreenBasis& basis, const float* scalars) const {
-  const auto& pts = mesh->points;
-  std::vector<ScreenPoint> out(pts.size());
-  // A point at (or behind) the eye plane has no screen position; a margin of 1e-9 of the mesh
-  // size keeps 1/z finite and well away from overflow.
-  const double min_depth = 1e-9 * std::max(mesh->bounds.diagonal(), 1e-300);
-  std::atomic<bool> all_in_front{true};
-  parallel_for(pts.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
-    bool ok = true;
-    for (std::size_t i = b; i < e; ++i) {
-      ok = ok && dot(pts[i] - basis.eye, basis.forward) > min_depth;
-      out[i] = basis.project(pts[i], scalars[i]);
-    }
-    if (!ok) all_in_front = false;
-  });
-  if (!all_in_front) out.clear();
-  return out;
-}
-
-CpuRayCaster::Impl::TileFaces CpuRayCaster::Impl::bin_faces(const std::vector<ScreenPoint>& screen,
-                                                             const Camera& camera, int tile) const {
-  const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
-  // Pixel (px, py) looks through image-plane point X = (2 (px + 0.5) / W - 1) half_w, and
-  // likewise for Y (down the screen): invert that for each face's corners.
-  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
-  const double half_w = half_h * camera.width / camera.height;
-  struct TileRange {
-    int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
-  };
-  std::vector<TileRange> ranges(triangles.size());
-  parallel_for(triangles.size(), 1 << 12, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
-      for (const std::int32_t v : triangles[i].v) {
-        const ScreenPoint& p = screen[static_cast<std::size_t>(v)];
-        const double px = (p.x / half_w + 1.0) * 0.5 * camera.width - 0.5;
-        const double py = (p.y / half_h + 1.0) * 0.5 * camera.height - 0.5;
-        lo_x = std::min(lo_x, px);
-        hi_x = std::max(hi_x, px);
-        lo_y = std::min(lo_y, py);
-        hi_y = std::max(hi_y, py);
-      }
-      // One pixel of margin: a ray through a face's corner or edge must find it whichever way
-      // the rounding of this estimate goes (the entry test itself is exact).
-      auto tile_of = [tile](double p, int count) {
-        return static_cast<int>(std::clamp(std::floor(p / tile), -1.0, static_cast<double>(count)));
-      };
-      TileRange& r = ranges[i];
-      r.x0 = std::max(0, tile_of(lo_x - 1.0, tiles_x));
-      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + 1.0, tiles_x));
-      r.y0 = std::max(0, tile_of(lo_y - 1.0, tiles_y));
-      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + 1.0, tiles_y));
-    }
-  });
-  TileFaces bins;
-  bins.start.assign(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
-  for (const TileRange& r : ranges)
-    for (int ty = r.y0; ty <= r.y1; ++ty)
-      for (int tx = r.x0; tx <= r.x1; ++tx) ++bins.start[static_cast<std::size_t>(ty) * tiles_x + tx + 1];
-  for (std::size_t i = 1; i < bins.start.size(); ++i) bins.start[i] += bins.start[i - 1];
-  bins.faces.resize(static_cast<std::size_t>(bins.start.back()));
-  std::vector<std::int32_t> fill(bins.start.begin(), bins.start.end() - 1);
-  for (std::size_t i = 0; i < ranges.size(); ++i)
-    for (int ty = ranges[i].y0; ty <= ranges[i].y1; ++ty)
-      for (int tx = ranges[i].x0; tx <= ranges[i].x1; ++tx)
-        bins.faces[static_cast<std::size_t>(fill[static_cast<std::size_t>(ty) * tiles_x + tx]++)] =
-            static_cast<std::int32_t>(i);
-  return bins;
-}
-
-ShadeContext CpuRayCaster::Impl::shade_context(const float* scalars, const Shading& shading) const {
-  ShadeContext sc;
-  sc.shading = shading;
-  if (shading.model == LightingModel::light_volume) sc.light_rgb = shading.light_rgb->data();
-  const double dl = length(shading.light_direction);
-  sc.headlight = !(dl > 0);
-  if (!sc.headlight) sc.to_light = shading.light_direction / dl;
-  if (shading.model == LightingModel::none) return sc;
-  // The scalar is linear in a tet: its gradient is constant there, the sum over the faces'
-  // area vectors weighted by the opposite value differences (divided by 6 x volume, which only
-  // scales it: the direction is all Phong needs).
-  const auto& pts = mesh->points;
-  sc.normals.resize(tets.size());
-  parallel_for(tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const WalkTet& w = tets[i];
-      const Vec3d p0 = pts[static_cast<std::size_t>(w.v[0])];
-      const Vec3d e1 = pts[static_cast<std::size_t>(w.v[1])] - p0, e2 = pts[static_cast<std::size_t>(w.v[2])] - p0,
-                  e3 = pts[static_cast<std::size_t>(w.v[3])] - p0;
-      const double s0 = scalars[w.v[0]];
-      const Vec3d g = cross(e2, e3) * (scalars[w.v[1]] - s0) + cross(e3, e1) * (scalars[w.v[2]] - s0) +
-                      cross(e1, e2) * (scalars[w.v[3]] - s0);
-      const double gl = length(g);
-      auto& n = sc.normals[i];
-      if (std::isfinite(gl) && gl > 0) {
-        n = {static_cast<float>(g.x / gl), static_cast<float>(g.y / gl), static_cast<float>(g.z / gl), 1.0f};
-      } else {
-        n = {0.0f, 0.0f, 0.0f, 0.0f};
-      }
-    }
-  });
-  return sc;
-}
-
 CpuRayCaster::CpuRayCaster(std::shared_ptr<const TetMesh> mesh) : m_impl(std::make_unique<Impl>(std::move(mesh))) {}
 CpuRayCaster::~CpuRayCaster() = default;
 
@@ -507,15 +350,14 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   options.shading.validate("CpuRayCaster::render", m_impl->mesh->points.size());
   const TfTable table(tf);
   const bool shaded = options.shading.model != LightingModel::none;
-  const ShadeContext shade = shaded ? m_impl->shade_context(scalars.data(), options.shading) : ShadeContext{};
+  const ShadeContext shade = shaded ? detail::make_shade_context(m_impl->tets, m_impl->mesh->points, scalars.data(),
+                                                                 options.shading)
+                                    : ShadeContext{};
   Image image(camera.width, camera.height);
   // With the whole mesh in front of the eye, projections are shared by all rays of the frame.
-  ScreenBasis basis;
-  basis.eye = camera.eye;
-  basis.forward = normalize(camera.target - camera.eye);
-  basis.right = normalize(cross(basis.forward, camera.up));
-  basis.down = cross(basis.forward, basis.right);
-  const std::vector<ScreenPoint> screen = m_impl->screen_points(basis, scalars.data());
+  const ScreenBasis basis = detail::screen_basis(camera);
+  const std::vector<ScreenPoint> screen =
+      detail::project_to_screen(basis, m_impl->mesh->points, scalars.data(), m_impl->mesh->bounds);
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
   // Boundary faces binned by small screen tiles replace the per-ray BVH search: a bin of a few
@@ -523,7 +365,8 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   // span a few pixels or more.
   constexpr int bin = 4;
   const int bins_x = (camera.width + bin - 1) / bin;
-  const Impl::TileFaces bins = screen.empty() ? Impl::TileFaces{} : m_impl->bin_faces(screen, camera, bin);
+  const detail::ScreenBins bins =
+      screen.empty() ? detail::ScreenBins{} : detail::bin_boundary_faces(m_impl->triangles, screen, camera, bin);
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
     std::vector<Entry> entries;
     entries.reserve(64);

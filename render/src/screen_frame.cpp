@@ -1,0 +1,92 @@
+// render/src/screen_frame.cpp -- screen-space points and boundary-face bins of one frame
+#include "screen_frame.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+
+#include "penumbra/core/thread_pool.h"
+
+namespace penumbra::render::detail {
+
+ScreenBasis screen_basis(const Camera& camera) {
+  ScreenBasis basis;
+  basis.eye = camera.eye;
+  basis.forward = normalize(camera.target - camera.eye);
+  basis.right = normalize(cross(basis.forward, camera.up));
+  basis.down = cross(basis.forward, basis.right);
+  return basis;
+}
+
+std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::vector<Vec3d>& pts, const float* scalars,
+                                          const Bounds& bounds) {
+  std::vector<ScreenPoint> out(pts.size());
+  // A point at (or behind) the eye plane has no screen position; a margin of 1e-9 of the mesh
+  // size keeps 1/z finite and well away from overflow.
+  const double min_depth = 1e-9 * std::max(bounds.diagonal(), 1e-300);
+  std::atomic<bool> all_in_front{true};
+  parallel_for(pts.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    bool ok = true;
+    for (std::size_t i = b; i < e; ++i) {
+      ok = ok && dot(pts[i] - basis.eye, basis.forward) > min_depth;
+      out[i] = basis.project(pts[i], scalars[i]);
+    }
+    if (!ok) all_in_front = false;
+  });
+  if (!all_in_front) out.clear();
+  return out;
+}
+
+ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, const std::vector<ScreenPoint>& screen,
+                              const Camera& camera, int tile) {
+  const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
+  // Pixel (px, py) looks through image-plane point X = (2 (px + 0.5) / W - 1) half_w, and
+  // likewise for Y (down the screen): invert that for each face's corners.
+  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
+  const double half_w = half_h * camera.width / camera.height;
+  struct TileRange {
+    int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
+  };
+  std::vector<TileRange> ranges(triangles.size());
+  parallel_for(triangles.size(), 1 << 12, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
+      for (const std::int32_t v : triangles[i].v) {
+        const ScreenPoint& p = screen[static_cast<std::size_t>(v)];
+        const double px = (p.x / half_w + 1.0) * 0.5 * camera.width - 0.5;
+        const double py = (p.y / half_h + 1.0) * 0.5 * camera.height - 0.5;
+        lo_x = std::min(lo_x, px);
+        hi_x = std::max(hi_x, px);
+        lo_y = std::min(lo_y, py);
+        hi_y = std::max(hi_y, py);
+      }
+      // One pixel of margin: a ray through a face's corner or edge must find it whichever way
+      // the rounding of this estimate goes (the entry test itself is exact).
+      auto tile_of = [tile](double p, int count) {
+        return static_cast<int>(std::clamp(std::floor(p / tile), -1.0, static_cast<double>(count)));
+      };
+      TileRange& r = ranges[i];
+      r.x0 = std::max(0, tile_of(lo_x - 1.0, tiles_x));
+      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + 1.0, tiles_x));
+      r.y0 = std::max(0, tile_of(lo_y - 1.0, tiles_y));
+      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + 1.0, tiles_y));
+    }
+  });
+  ScreenBins bins;
+  bins.start.assign(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
+  for (const TileRange& r : ranges)
+    for (int ty = r.y0; ty <= r.y1; ++ty)
+      for (int tx = r.x0; tx <= r.x1; ++tx) ++bins.start[static_cast<std::size_t>(ty) * tiles_x + tx + 1];
+  for (std::size_t i = 1; i < bins.start.size(); ++i) bins.start[i] += bins.start[i - 1];
+  bins.faces.resize(static_cast<std::size_t>(bins.start.back()));
+  std::vector<std::int32_t> fill(bins.start.begin(), bins.start.end() - 1);
+  for (std::size_t i = 0; i < ranges.size(); ++i)
+    for (int ty = ranges[i].y0; ty <= ranges[i].y1; ++ty)
+      for (int tx = ranges[i].x0; tx <= ranges[i].x1; ++tx)
+        bins.faces[static_cast<std::size_t>(fill[static_cast<std::size_t>(ty) * tiles_x + tx]++)] =
+            static_cast<std::int32_t>(i);
+  return bins;
+}
+
+}  // namespace penumbra::render::detail

@@ -1,0 +1,52 @@
+// render/src/shade_context.h -- per-frame shading state of the CPU walk (see
+// penumbra/render/shading.h)
+#pragma once
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/core/vec3.h"
+#include "penumbra/render/shading.h"
+#include "walk_mesh.h"
+
+namespace penumbra::render::detail {
+
+// What a shaded render needs per frame: unit scalar gradients per walk tet (w = 1 where the
+// gradient exists, 0 where it vanishes or a vertex has no data) and the light field.
+struct ShadeContext {
+  std::vector<std::array<float, 4>> normals;
+  const float* light_rgb = nullptr;  // 3 per point, original point ids; null: L = 1
+  Shading shading;
+  bool headlight = true;
+  Vec3d to_light{0, 0, 0};
+
+  // The Phong factor of a tet seen along unit direction d. A vanishing gradient (a constant
+  // field) has no orientation: it is lit as if facing the light, without a highlight.
+  double phong(std::int32_t tet, const Vec3d& d) const {
+    if (shading.model == LightingModel::none) return 1.0;
+    const auto& n = normals[static_cast<std::size_t>(tet)];
+    if (n[3] == 0.0f) return shading.ambient + shading.diffuse;
+    const Vec3d normal{n[0], n[1], n[2]}, view = -d;
+    const Vec3d l = headlight ? view : to_light;
+    Vec3d h = l + view;
+    const double hl = length(h);
+    h = hl > 0 ? h / hl : l;
+    // Two-sided: an iso-surface is lit from either side.
+    return shading.ambient + shading.diffuse * std::fabs(dot(normal, l)) +
+           shading.specular * std::pow(std::fabs(dot(normal, h)), shading.shininess);
+  }
+
+  void light_at(std::int32_t point, double out[3]) const {
+    for (int c = 0; c < 3; ++c) {
+      const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point) + c] : 1.0f;
+      out[c] = std::isfinite(v) ? v : 0.0;
+    }
+  }
+};
+
+/// The shading state for `shading` (validated) over the walk tets `tets` of points `pts`.
+ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vector<Vec3d>& pts, const float* scalars,
+                                const Shading& shading);
+
+}  // namespace penumbra::render::detail
