@@ -6,7 +6,8 @@
 # Environment: PNB_BENCH_BUILD_DIR (default build-bench), PNB_BENCH_FRAMES (timed frames, default 5,
 # at least 5 for reported numbers), PNB_BENCH_SCENES (default "holeblock-1m grid-aligned"),
 # PNB_BENCH_VTK_INTEGRATOR (linear, the default: the integrator matching Penumbra's optical model;
-# or default: the one each VTK mapper picks by itself).
+# or default: the one each VTK mapper picks by itself), PNB_BENCH_VTK_RENDERERS (default
+# "vtk-raycast,vtk-zsweep"; the z-sweep takes minutes per frame).
 set -euo pipefail
 
 usage() {
@@ -61,7 +62,8 @@ bench_render() {
     # Debian's VTK renders only through X11; Penumbra needs no display.
     log "render/$scene: vtk-raycast, vtk-zsweep (under xvfb-run; the z-sweep takes about a minute per frame)"
     lines+=$'\n'$(xvfb-run -a -s "-screen 0 1024x1024x24" "$bin/pnb_bench_render_vtk" --scene "$scene" \
-      --data-dir "$data" --frames "$frames" --integrator "${PNB_BENCH_VTK_INTEGRATOR:-linear}")
+      --data-dir "$data" --frames "$frames" --integrator "${PNB_BENCH_VTK_INTEGRATOR:-linear}" \
+      --renderers "${PNB_BENCH_VTK_RENDERERS:-vtk-raycast,vtk-zsweep}")
     python3 "$root/bench/render/combine.py" <<<"$lines"
   done
 }
