@@ -278,6 +278,7 @@ Config parse_document(const json& j) {
   if (const json* b = find(j, "backend")) {
     const std::string s = choice(*b, "backend", {"cpu", "gpu", "auto"});
     c.backend = s == "cpu" ? Backend::cpu : (s == "gpu" ? Backend::gpu : Backend::automatic);
+    c.cpu_fallback = c.backend == Backend::automatic;
   }
   return c;
 }

@@ -14,7 +14,9 @@ namespace penumbra::insitu {
 /// What pnb_create does when the output directory already exists and is not empty.
 enum class IfExists { error, resume };
 
-/// Which renderer runs the steps. `automatic` picks the best available (today: cpu).
+/// Which renderer runs the steps. `automatic` takes a hardware GPU when EGL lists one and the
+/// CPU path otherwise; `gpu` also runs on a software device (llvmpipe) and says so once in the
+/// log. A Context replaces `automatic` by the backend it resolved to.
 enum class Backend { cpu, gpu, automatic };
 
 /// An explicit camera: eye looking at target.
@@ -66,6 +68,8 @@ struct Config {
   std::vector<FieldConfig> fields;
   TriggerConfig trigger;
   Backend backend = Backend::cpu;
+  /// Set for "auto": a mesh the GPU cannot hold (device memory) is rendered on the CPU instead.
+  bool cpu_fallback = false;
 
   /// True when `name` is rendered by at least one field entry.
   bool uses_field(const std::string& name) const;

@@ -6,11 +6,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <map>
+#include <mutex>
 
 #include "penumbra/core/error.h"
 #include "penumbra/render/camera.h"
 #include "penumbra/render/cpu_ray_caster.h"
+#include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "penumbra/render/tet_mesh.h"
 
@@ -70,6 +74,60 @@ render::TransferFunction resolve_transfer_function(const FieldConfig& f, const s
   return tf;
 }
 
+void log_line(const std::string& line) { std::fprintf(stderr, "penumbra: %s\n", line.c_str()); }
+
+/// The GPU context, one per process and EGL setting ($PNB_EGL_LIBRARY, $PNB_EGL_DEVICE), shared
+/// by every Context: opening one costs time and device memory. Kept for the life of the process
+/// (some drivers crash when a context is destroyed during static destruction). The device line
+/// is logged when it is opened, and a software device is pointed out once.
+std::shared_ptr<render::GpuDevice> process_gpu_device(bool require_hardware) {
+  static std::mutex mutex;
+  static auto* devices = new std::map<std::string, std::shared_ptr<render::GpuDevice>>();
+  auto env = [](const char* name) {
+    const char* v = std::getenv(name);
+    return std::string(v ? v : "");
+  };
+  const std::string key = env("PNB_EGL_LIBRARY") + "\n" + env("PNB_EGL_DEVICE");
+  std::lock_guard lock(mutex);
+  auto& device = (*devices)[key];
+  if (device && (!require_hardware || !device->info().software)) return device;
+  render::GpuOptions options;
+  options.require_hardware = require_hardware;
+  options.log = log_line;
+  device = render::GpuDevice::open(options);
+  if (device->info().software)
+    log_line("backend \"gpu\" runs on a software rasteriser (" + device->info().gl_renderer +
+             "): the images are the GPU path's, the speed is a CPU's");
+  return device;
+}
+
+/// Resolves the configured backend to the one that runs: cpu or gpu. Throws
+/// Error(backend_unavailable) when "gpu" is asked for and cannot run.
+Backend resolve_backend(Backend requested) {
+  if (requested == Backend::cpu) return Backend::cpu;
+  if (requested == Backend::gpu) {
+    try {
+      process_gpu_device(false);
+    } catch (const Error& e) {
+      throw Error(ErrorCode::backend_unavailable, std::string("config: backend \"gpu\" is not available: ") +
+                                                      e.what() + "; use \"cpu\" or \"auto\"");
+    }
+    return Backend::gpu;
+  }
+  // auto: a hardware GPU if there is one, else the CPU path (llvmpipe would only be slower).
+  if (!render::hardware_gpu_present()) {
+    log_line("backend \"auto\": no hardware GPU found through EGL; rendering on the CPU");
+    return Backend::cpu;
+  }
+  try {
+    process_gpu_device(true);
+    return Backend::gpu;
+  } catch (const Error& e) {
+    log_line(std::string("backend \"auto\": the GPU cannot be used (") + e.what() + "); rendering on the CPU");
+    return Backend::cpu;
+  }
+}
+
 }  // namespace
 
 std::string format_number(double v) {
@@ -86,7 +144,8 @@ struct Context::CameraEntry {
 
 struct Context::PreparedMesh {
   std::shared_ptr<const render::TetMesh> tets;
-  std::unique_ptr<render::CpuRayCaster> caster;
+  std::unique_ptr<render::CpuRayCaster> caster;      ///< null when the GPU renders
+  std::unique_ptr<render::GpuRayCaster> gpu_caster;  ///< null when the CPU renders
   std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
   std::vector<std::uint8_t> cell_types;
   MeshView view;  ///< over the owned copies (points from the prepared mesh)
@@ -95,10 +154,9 @@ struct Context::PreparedMesh {
 
 Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
-  if (m_config.backend == Backend::gpu)
-    throw Error(ErrorCode::backend_unavailable,
-                "config: backend \"gpu\" is not available in this build (no GPU backend compiled in); "
-                "use \"cpu\" or \"auto\"");
+  // From here on config().backend names the renderer that runs: cpu or gpu.
+  if (m_config.backend == Backend::automatic) m_config.cpu_fallback = true;
+  m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);
 }
@@ -130,7 +188,15 @@ void Context::publish_mesh(const MeshView& mesh) {
   }
   auto p = std::make_unique<PreparedMesh>();
   p->tets = std::make_shared<const render::TetMesh>(render::prepare_tet_mesh(mesh, "pnb_publish_mesh"));
-  p->caster = std::make_unique<render::CpuRayCaster>(p->tets);
+  if (m_config.backend == Backend::gpu) {
+    try {
+      p->gpu_caster = std::make_unique<render::GpuRayCaster>(process_gpu_device(false), p->tets);
+    } catch (const Error& e) {
+      if (!m_config.cpu_fallback || e.code() != ErrorCode::out_of_memory) throw;
+      log_line(std::string("backend \"auto\": ") + e.what() + "; rendering this mesh on the CPU");
+    }
+  }
+  if (!p->gpu_caster) p->caster = std::make_unique<render::CpuRayCaster>(p->tets);
 
   const std::size_t isz = scalar_size(mesh.connectivity.type);
   const auto* cb = static_cast<const std::byte*>(mesh.connectivity.data);
@@ -224,7 +290,8 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
   std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
   for (const CameraEntry& cam : m_mesh->cameras) {
     const auto t0 = Clock::now();
-    const render::Image image = m_mesh->caster->render(scalars, tf, cam.camera);
+    const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera)
+                                                   : m_mesh->caster->render(scalars, tf, cam.camera);
     render_ms += ms_since(t0);
     const std::string rel = m_database->new_image_path(m_field_labels[index], cycle_text + cam.stem);
     render::write_png(m_database->path_of(rel), render::to_rgb8(image, m_config.background), image.width, image.height);

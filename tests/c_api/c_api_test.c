@@ -118,7 +118,11 @@ static void test_create_errors(const char* tmp) {
   snprintf(config, sizeof config,
            "{\"output\": {\"directory\": \"%s/gpu\"}, \"cameras\": {\"phi\": [0], \"theta\": [0]}, "
            "\"fields\": [{\"name\": \"T\"}], \"backend\": \"gpu\"}", tmp);
-  expect(pnb_create(config, &ctx), PNB_BACKEND_UNAVAILABLE, NULL, "gpu", "create with gpu backend");
+  /* No EGL on the node (simulated by naming a library that does not exist): the gpu backend is
+   * unavailable, with or without the GPU backend compiled in. */
+  setenv("PNB_EGL_LIBRARY", "/nonexistent/libEGL.so.1", 1);
+  expect(pnb_create(config, &ctx), PNB_BACKEND_UNAVAILABLE, NULL, "gpu", "create with gpu backend and no EGL");
+  unsetenv("PNB_EGL_LIBRARY");
 }
 
 static void test_null_context(void) {

@@ -9,6 +9,7 @@
 #include "context.h"
 #include "fixtures/meshes.h"
 #include "penumbra/core/error.h"
+#include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "test_util.h"
 
@@ -221,16 +222,88 @@ TEST(Context, ExecuteBeforeMeshAndAfterFinalizeAreInvalidOperations) {
   EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
 }
 
-TEST(Context, GpuBackendIsReportedUnavailableAutoFallsBackToCpu) {
+// Sets an environment variable for one scope.
+class ScopedEnv {
+public:
+  ScopedEnv(const char* name, const char* value) : m_name(name) { ::setenv(name, value, 1); }
+  ~ScopedEnv() { ::unsetenv(m_name); }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+private:
+  const char* m_name;
+};
+
+TEST(Context, GpuBackendWithoutEglIsUnavailableAndAutoFallsBackToCpu) {
   TempDir tmp;
+  const ScopedEnv no_egl("PNB_EGL_LIBRARY", "/nonexistent/libEGL.so.1");
   try {
     Context ctx(parse_config(testing::small_config(tmp / "a", R"([{"name": "T"}])", R"(, "backend": "gpu")")));
-    FAIL();
+    FAIL() << "backend gpu without EGL was accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::backend_unavailable);
-    EXPECT_NE(std::string(e.what()).find("backend \"gpu\" is not available"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("backend \"gpu\" is not available"), std::string::npos) << e.what();
+    if (render::gpu_backend_compiled())
+      EXPECT_NE(std::string(e.what()).find("cannot load the EGL library '/nonexistent/libEGL.so.1'"), std::string::npos)
+          << e.what();
   }
-  EXPECT_NO_THROW(Context(parse_config(testing::small_config(tmp / "b", R"([{"name": "T"}])", R"(, "backend": "auto")"))));
+  Context ctx(parse_config(testing::small_config(tmp / "b", R"([{"name": "T"}])", R"(, "backend": "auto")")));
+  EXPECT_EQ(ctx.config().backend, Backend::cpu);
+  Scene s;
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.blob), false);
+  EXPECT_TRUE(ctx.execute(0, 0));
+  EXPECT_EQ(ctx.last_step().images, 2);
+}
+
+TEST(Context, AutoTakesTheGpuOnlyWhenItIsHardware) {
+  TempDir tmp;
+  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])", R"(, "backend": "auto")")));
+  EXPECT_EQ(ctx.config().backend, render::hardware_gpu_present() ? Backend::gpu : Backend::cpu);
+}
+
+TEST(Context, SoftwareGpuIsReportedOnceInTheLog) {
+  if (!render::gpu_backend_compiled() || render::hardware_gpu_present())
+    GTEST_SKIP() << "needs the GPU backend on a node with only a software device";
+  TempDir tmp;
+  // Its own EGL setting: the process-wide device for it is opened inside this test.
+  const ScopedEnv surfaceless("PNB_EGL_DEVICE", "surfaceless");
+  ::testing::internal::CaptureStderr();
+  for (const char* dir : {"a", "b"})
+    Context(parse_config(testing::small_config(tmp / dir, R"([{"name": "T"}])", R"(, "backend": "gpu")")));
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  auto count = [&](const std::string& needle) {
+    int n = 0;
+    for (auto at = log.find(needle); at != std::string::npos; at = log.find(needle, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("penumbra: GPU backend on Mesa surfaceless platform"), 1) << log;
+  EXPECT_EQ(count("runs on a software rasteriser"), 1) << log;
+}
+
+TEST(Context, GpuBackendWritesTheCpuBackendsImages) {
+  if (!render::gpu_backend_compiled()) GTEST_SKIP() << "built without the GPU backend";
+  TempDir tmp;
+  Scene s;
+  std::vector<unsigned char> images[2];
+  const char* backends[2] = {"cpu", "gpu"};
+  for (int b = 0; b < 2; ++b) {
+    // On a node without a GPU, "gpu" runs on Mesa's software device: that is how CI tests it.
+    Context ctx(parse_config(testing::small_config(tmp / backends[b], R"([{"name": "T"}])",
+                                                   std::string(R"(, "backend": ")") + backends[b] + "\"")));
+    EXPECT_EQ(ctx.config().backend, b == 0 ? Backend::cpu : Backend::gpu);
+    ctx.publish_mesh(s.mesh.view());
+    ctx.publish_field(fixtures::point_field("T", s.blob), false);
+    ASSERT_TRUE(ctx.execute(0.5, 3));
+    int w = 0, h = 0;
+    images[b] = image(tmp / backends[b], "T/c000003_phi90_theta30.png", w, h);
+    EXPECT_EQ(w, 24);
+  }
+  // float32 on the GPU against float64: at most single 8-bit rounding flips (see gpu_vs_cpu_test.cpp).
+  EXPECT_LT(render::rms_difference_pct(images[0], images[1]), 0.5);
+  int max_diff = 0;
+  for (std::size_t i = 0; i < images[0].size(); ++i) max_diff = std::max(max_diff, std::abs(images[0][i] - images[1][i]));
+  EXPECT_LE(max_diff, 2);
 }
 
 TEST(Context, LookAtCamerasAddACameraColumn) {

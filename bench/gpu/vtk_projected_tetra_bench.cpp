@@ -1,0 +1,219 @@
+// bench/gpu/vtk_projected_tetra_bench.cpp -- renders a benchmark scene with VTK 9's
+// vtkProjectedTetrahedraMapper (cell projection through OpenGL rasterisation, the classic GPU
+// peer of a ray caster) and measures its error against Penumbra's cached reference image.
+//
+// Usage: pnb_bench_gpu_vtk --scene NAME --data-dir DIR [--frames N] [--size WxH]
+// Debian's VTK renders through X11 only: run it under xvfb-run. Prints one JSON object.
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkColorTransferFunction.h>
+#include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkOpenGLRenderWindow.h>
+#include <vtkPiecewiseFunction.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkProjectedTetrahedraMapper.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkVolume.h>
+#include <vtkVolumeProperty.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "bench_util.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/image.h"
+#include "scene.h"
+
+namespace pb = penumbra::bench;
+namespace pr = penumbra::render;
+
+namespace {
+
+vtkSmartPointer<vtkUnstructuredGrid> make_grid(const pb::Scene& scene) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(scene.point_count()));
+  for (std::size_t i = 0; i < scene.point_count(); ++i) points->SetPoint(static_cast<vtkIdType>(i), &scene.points[i * 3]);
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(scene.tet_count() + 1));
+  for (std::size_t c = 0; c <= scene.tet_count(); ++c) offsets->SetValue(static_cast<vtkIdType>(c), 4 * static_cast<vtkIdType>(c));
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(scene.tets.size()));
+  for (std::size_t i = 0; i < scene.tets.size(); ++i) connectivity->SetValue(static_cast<vtkIdType>(i), scene.tets[i]);
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  vtkNew<vtkFloatArray> scalars;
+  scalars->SetName("s");
+  scalars->SetNumberOfValues(static_cast<vtkIdType>(scene.scalars.size()));
+  for (std::size_t i = 0; i < scene.scalars.size(); ++i) scalars->SetValue(static_cast<vtkIdType>(i), scene.scalars[i]);
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->SetPoints(points);
+  grid->SetCells(VTK_TETRA, cells);
+  grid->GetPointData()->SetScalars(scalars);
+  return grid;
+}
+
+// The projected-tetrahedra mapper keeps the opacity function's value per vertex in 8 bits (so in
+// [0, 1]) and composites 1 - exp(-a * thickness / unit distance). An extinction tau per world
+// unit is therefore a = tau / tau_max over a unit distance of 1 / tau_max.
+vtkSmartPointer<vtkVolumeProperty> make_property(const pb::Scene& scene) {
+  double tau_max = 0;
+  for (const pb::TfNode& n : scene.tf) tau_max = std::max(tau_max, n.extinction);
+  if (!(tau_max > 0)) tau_max = 1;
+  vtkNew<vtkColorTransferFunction> color;
+  color->SetColorSpaceToRGB();
+  vtkNew<vtkPiecewiseFunction> opacity;
+  for (const pb::TfNode& n : scene.tf) {
+    color->AddRGBPoint(n.x, n.r, n.g, n.b);
+    opacity->AddPoint(n.x, n.extinction / tau_max);
+  }
+  auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+  property->SetColor(color);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(1.0 / tau_max);
+  property->SetInterpolationTypeToLinear();
+  property->ShadeOff();
+  return property;
+}
+
+std::vector<unsigned char> read_back(vtkRenderWindow* window, int width, int height) {
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  grab->ShouldRerenderOff();
+  grab->Update();
+  vtkImageData* img = grab->GetOutput();
+  int dims[3];
+  img->GetDimensions(dims);
+  penumbra::require(dims[0] == width && dims[1] == height, "pnb_bench_gpu_vtk: framebuffer has the wrong size");
+  auto* px = static_cast<unsigned char*>(img->GetScalarPointer());
+  std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
+  for (int y = 0; y < height; ++y)  // VTK's rows start at the bottom
+    std::copy(px + static_cast<std::size_t>(height - 1 - y) * width * 3, px + static_cast<std::size_t>(height - y) * width * 3,
+              rgb.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * width * 3));
+  return rgb;
+}
+
+// "llvmpipe (LLVM 15.0.6, 256 bits)" from the window's capability report.
+std::string renderer_string(vtkRenderWindow* window) {
+  auto* gl = vtkOpenGLRenderWindow::SafeDownCast(window);
+  if (gl == nullptr) return "unknown";
+  std::istringstream report(gl->ReportCapabilities());
+  for (std::string line; std::getline(report, line);) {
+    const std::string key = "OpenGL renderer string:";
+    const auto at = line.find(key);
+    if (at == std::string::npos) continue;
+    std::string v = line.substr(at + key.size());
+    v.erase(0, v.find_first_not_of(" \t"));
+    return v;
+  }
+  return "unknown";
+}
+
+int run(int argc, char** argv) {
+  const std::string name = pb::option(argc, argv, "scene", "");
+  const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
+  const std::string size = pb::option(argc, argv, "size", "");
+  penumbra::require(!name.empty() && !data_dir.empty(), "pnb_bench_gpu_vtk: --scene NAME and --data-dir DIR are required");
+  penumbra::require(frames >= 1, "pnb_bench_gpu_vtk: --frames must be >= 1");
+  pb::Scene scene = pb::load_scene(name, data_dir);
+  if (!size.empty()) {
+    int w = 0, h = 0;
+    penumbra::require(std::sscanf(size.c_str(), "%dx%d", &w, &h) == 2 && w > 0 && h > 0,
+                      "pnb_bench_gpu_vtk: --size '" + size + "', expected WxH");
+    scene.width = w;
+    scene.height = h;
+  }
+  const std::string tag = scene.name + (size.empty() ? "" : "-" + size);
+  const std::string ref_path = pb::reference_path(scene, data_dir);
+  penumbra::require(std::filesystem::exists(ref_path),
+                    "pnb_bench_gpu_vtk: reference image '" + ref_path + "' is missing (pnb_bench_gpu_penumbra writes it)");
+  int rw = 0, rh = 0;
+  const std::vector<unsigned char> reference = pr::read_png_rgb(ref_path, rw, rh);
+  penumbra::require(rw == scene.width && rh == scene.height, "pnb_bench_gpu_vtk: reference has the wrong size");
+
+  const vtkSmartPointer<vtkUnstructuredGrid> grid = make_grid(scene);
+  vtkNew<vtkProjectedTetrahedraMapper> mapper;
+  mapper->SetInputData(grid);
+  vtkNew<vtkVolume> volume;
+  volume->SetMapper(mapper);
+  volume->SetProperty(make_property(scene));
+  vtkNew<vtkRenderer> ren;
+  ren->SetBackground(scene.background[0], scene.background[1], scene.background[2]);
+  ren->AddVolume(volume);
+  vtkCamera* cam = ren->GetActiveCamera();
+  const pb::SceneCamera& c = scene.camera;
+  cam->SetPosition(c.eye.x, c.eye.y, c.eye.z);
+  cam->SetFocalPoint(c.target.x, c.target.y, c.target.z);
+  cam->SetViewUp(c.up.x, c.up.y, c.up.z);
+  cam->SetViewAngle(c.fov_y_deg);
+  ren->ResetCameraClippingRange();
+  vtkNew<vtkRenderWindow> window;
+  window->SetSize(scene.width, scene.height);
+  window->SetMultiSamples(0);
+  window->AddRenderer(ren);
+
+  pb::Stopwatch first_clock;
+  window->Render();
+  const double first_ms = first_clock.ms();
+  std::fprintf(stderr, "pnb_bench_gpu_vtk: %s warm-up frame: %.1f ms\n", tag.c_str(), first_ms);
+  std::vector<double> times;
+  for (int f = 0; f < frames; ++f) {
+    pb::Stopwatch clock;
+    window->Render();
+    times.push_back(clock.ms());
+  }
+  const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
+  const std::string image_path = data_dir + "/images/" + tag + "-vtk-projected-tetra.png";
+  std::filesystem::create_directories(data_dir + "/images");
+  pr::write_png(image_path, rgb, scene.width, scene.height);
+  const pb::ImageError err = pb::compare_rgb8(rgb, reference);
+  nlohmann::ordered_json line;
+  line["bench"] = "gpu";
+  line["scene"] = scene.name;
+  line["scene_kind"] = scene.kind;
+  line["renderer"] = "vtk-projected-tetra";
+  line["tets"] = scene.tet_count();
+  line["points"] = scene.point_count();
+  line["width"] = scene.width;
+  line["height"] = scene.height;
+  line["frames"] = frames;
+  line["ms_per_frame"] = pb::rounded(pb::median(times));
+  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
+  line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
+  line["max_abs_error"] = err.max_abs;
+  line["bad_pixels"] = err.bad_pixels;
+  line["device"] = renderer_string(window);
+  line["first_frame_ms"] = pb::rounded(first_ms, 1);
+  line["load_avg"] = pb::load_average();
+  line["reference"] = ref_path;
+  line["image"] = image_path;
+  std::cout << line.dump() << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pnb_bench_gpu_vtk: %s\n", e.what());
+    return 1;
+  }
+}

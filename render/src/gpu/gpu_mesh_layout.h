@@ -1,0 +1,42 @@
+// render/src/gpu/gpu_mesh_layout.h -- a TetMesh packed into the shader storage buffers' layout
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/core/vec3.h"
+#include "penumbra/render/tet_mesh.h"
+
+namespace penumbra::render::gpu {
+
+/// A BVH node as the shader reads it (std430, 32 bytes): inner nodes have count 0 and their
+/// children at first and first + 1; leaves cover triangles [first, first + count).
+struct BvhNode {
+  float lo[3];
+  std::int32_t first;
+  float hi[3];
+  std::int32_t count;
+};
+static_assert(sizeof(BvhNode) == 32);
+
+/// Everything the ray-casting shader reads about a mesh, in float32 and int32.
+struct GpuMeshLayout {
+  /// Points are stored relative to the bounds' centre, so float32 keeps the precision of the
+  /// mesh's own size wherever the mesh sits in space.
+  Vec3d center;
+  double diagonal = 0;
+  std::vector<float> points;                             ///< x, y, z per point
+  std::vector<std::array<std::int32_t, 4>> tet_vertices; ///< point ids, tets in Morton order
+  /// Per face k: (neighbour << 2 | index of the shared face in the neighbour), -1 on the boundary.
+  std::vector<std::array<std::int32_t, 4>> tet_next;
+  /// Boundary triangles, outward vertex order, then (tet << 2 | face); in BVH leaf order.
+  std::vector<std::array<std::int32_t, 4>> triangles;
+  std::vector<BvhNode> nodes;
+};
+
+/// Packs `mesh`: tets reordered along a Morton curve of their centroids (neighbouring rays
+/// touch nearby memory), boundary faces under a BVH of median splits. Throws
+/// Error(invalid_argument) when the mesh exceeds the int32 indexing (2^29 tets).
+GpuMeshLayout build_gpu_mesh_layout(const TetMesh& mesh);
+
+}  // namespace penumbra::render::gpu

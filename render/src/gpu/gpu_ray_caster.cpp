@@ -1,0 +1,284 @@
+// render/src/gpu/gpu_ray_caster.cpp -- buffers, uniforms and dispatch of the ray-casting shader
+#include "penumbra/render/gpu_ray_caster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <numbers>
+#include <string>
+
+#include "gpu_device_impl.h"
+#include "gpu_mesh_layout.h"
+#include "gpu_tf_layout.h"
+#include "penumbra/core/error.h"
+#include "render_inputs.h"
+
+namespace penumbra::render {
+namespace gpu {
+extern const char* const kRayCastShader;  // render/shaders/ray_cast.comp, embedded at build time
+}  // namespace gpu
+
+namespace {
+
+using gpu::CurrentContext;
+using gpu::GlApi;
+
+enum Binding : GLuint { kPoints, kTetVertices, kTetNext, kScalars, kTriangles, kNodes, kTf, kPixels, kBindingCount };
+constexpr int kTile = 512;                     // pixels per side of one dispatch
+constexpr std::size_t kScalarBlock = 1 << 14;  // field values compared and re-sent per block
+
+std::string mib(std::size_t bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
+  return buf;
+}
+
+GLuint compile_program(const GlApi& gl) {
+  const GLuint shader = gl.CreateShader(GL_COMPUTE_SHADER);
+  const char* src = gpu::kRayCastShader;
+  gl.ShaderSource(shader, 1, &src, nullptr);
+  gl.CompileShader(shader);
+  GLint ok = 0;
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {};
+    gl.GetShaderInfoLog(shader, sizeof log, nullptr, log);
+    gl.DeleteShader(shader);
+    throw Error(ErrorCode::backend_unavailable, std::string("GPU backend: the ray-casting shader does not compile: ") + log);
+  }
+  const GLuint program = gl.CreateProgram();
+  gl.AttachShader(program, shader);
+  gl.LinkProgram(program);
+  gl.DeleteShader(shader);
+  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {};
+    gl.GetProgramInfoLog(program, sizeof log, nullptr, log);
+    gl.DeleteProgram(program);
+    throw Error(ErrorCode::backend_unavailable, std::string("GPU backend: the ray-casting shader does not link: ") + log);
+  }
+  return program;
+}
+
+}  // namespace
+
+struct GpuRayCaster::Impl {
+  std::shared_ptr<GpuDevice> device;
+  std::shared_ptr<const TetMesh> mesh;
+  Vec3d center;
+  double diagonal = 0;
+  std::size_t triangle_count = 0;
+  GLuint buffers[kBindingCount] = {};
+  std::size_t capacity[kBindingCount] = {};
+  std::vector<float> uploaded_scalars;  ///< what the device holds, to send only changed blocks
+  bool scalars_on_device = false;
+  std::size_t last_upload = 0;
+  GpuMemoryStats stats;
+
+  GpuDevice::Impl& dev() const { return device->impl(); }
+  void allocate(const GlApi& gl, Binding b, std::size_t bytes, const void* data);
+  void upload_scalars(const GlApi& gl, const std::vector<float>& scalars);
+  GLint uniform(const GlApi& gl, const char* name) const { return gl.GetUniformLocation(dev().ray_cast_program, name); }
+};
+
+void GpuRayCaster::Impl::allocate(const GlApi& gl, Binding b, std::size_t bytes, const void* data) {
+  bytes = std::max<std::size_t>(bytes, 16);  // an empty storage buffer cannot be bound
+  const auto limit = static_cast<std::size_t>(dev().info.max_storage_block_bytes);
+  if (limit > 0 && bytes > limit)
+    throw Error(ErrorCode::out_of_memory, "GpuRayCaster: a storage buffer of " + mib(bytes) +
+                                              " exceeds the device's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " + mib(limit) +
+                                              " (mesh of " + std::to_string(mesh->tet_count()) + " tets)");
+  while (gl.GetError() != GL_NO_ERROR) {
+  }
+  gl.NamedBufferData(buffers[b], static_cast<GLsizeiptr>(bytes), data, GL_STATIC_DRAW);
+  const GLenum err = gl.GetError();
+  if (err != GL_NO_ERROR)
+    throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
+                "GpuRayCaster: allocating " + mib(bytes) + " on the device failed with " + gpu::gl_error_text(err));
+  capacity[b] = bytes;
+}
+
+void GpuRayCaster::Impl::upload_scalars(const GlApi& gl, const std::vector<float>& scalars) {
+  last_upload = 0;
+  const std::size_t n = scalars.size();
+  if (!scalars_on_device) {
+    gl.NamedBufferSubData(buffers[kScalars], 0, static_cast<GLsizeiptr>(n * sizeof(float)), scalars.data());
+    uploaded_scalars = scalars;
+    scalars_on_device = true;
+    last_upload = n * sizeof(float);
+    return;
+  }
+  // Bitwise comparison (NaN == NaN here); runs of changed blocks go in one call.
+  for (std::size_t b = 0; b < n;) {
+    std::size_t e = std::min(n, b + kScalarBlock);
+    if (std::memcmp(&scalars[b], &uploaded_scalars[b], (e - b) * sizeof(float)) == 0) {
+      b = e;
+      continue;
+    }
+    while (e < n) {
+      const std::size_t e2 = std::min(n, e + kScalarBlock);
+      if (std::memcmp(&scalars[e], &uploaded_scalars[e], (e2 - e) * sizeof(float)) == 0) break;
+      e = e2;
+    }
+    gl.NamedBufferSubData(buffers[kScalars], static_cast<GLintptr>(b * sizeof(float)),
+                          static_cast<GLsizeiptr>((e - b) * sizeof(float)), &scalars[b]);
+    std::memcpy(&uploaded_scalars[b], &scalars[b], (e - b) * sizeof(float));
+    last_upload += (e - b) * sizeof(float);
+    b = e;
+  }
+}
+
+GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<const TetMesh> mesh)
+    : m_impl(std::make_unique<Impl>()) {
+  require(device != nullptr, "GpuRayCaster: device is null; expected GpuDevice::open()");
+  require(mesh != nullptr, "GpuRayCaster: mesh is null; expected a prepared TetMesh");
+  Impl& m = *m_impl;
+  m.device = std::move(device);
+  m.mesh = std::move(mesh);
+  const gpu::GpuMeshLayout layout = gpu::build_gpu_mesh_layout(*m.mesh);
+  m.center = layout.center;
+  m.diagonal = layout.diagonal;
+  m.triangle_count = layout.triangles.size();
+
+  GpuMemoryStats& s = m.stats;
+  s.tets = layout.tet_vertices.size();
+  s.points = m.mesh->points.size();
+  s.boundary_triangles = layout.triangles.size();
+  s.bvh_nodes = layout.nodes.size();
+  s.geometry_bytes = layout.points.size() * sizeof(float) + layout.tet_vertices.size() * 16;
+  s.adjacency_bytes = layout.tet_next.size() * 16;
+  s.scalar_bytes = s.points * sizeof(float);
+  s.acceleration_bytes = layout.triangles.size() * 16 + layout.nodes.size() * sizeof(gpu::BvhNode);
+  s.frame_bytes = 0;
+  const std::size_t needed = s.geometry_bytes + s.adjacency_bytes + s.scalar_bytes + s.acceleration_bytes;
+  GpuDevice::Impl& d = m.dev();
+  const std::string what = "GpuRayCaster: the mesh (" + std::to_string(s.tets) + " tets, " + std::to_string(s.points) +
+                           " points) needs " + mib(needed) + " on the device";
+  if (d.options.memory_limit_bytes > 0 && needed > d.options.memory_limit_bytes)
+    throw Error(ErrorCode::out_of_memory, what + " but the configured limit is " + mib(d.options.memory_limit_bytes));
+  if (d.info.free_memory_bytes >= 0 && needed > static_cast<std::size_t>(d.info.free_memory_bytes))
+    throw Error(ErrorCode::out_of_memory, what + " but only " + mib(static_cast<std::size_t>(d.info.free_memory_bytes)) +
+                                              " are free on " + d.info.gl_renderer);
+  if (d.max_compute_storage_blocks < kBindingCount)
+    throw Error(ErrorCode::backend_unavailable, "GPU backend: the device allows " +
+                                                    std::to_string(d.max_compute_storage_blocks) +
+                                                    " storage buffers per compute shader; 8 are needed");
+
+  CurrentContext current(d);
+  const GlApi& gl = current.gl();
+  if (d.ray_cast_program == 0) d.ray_cast_program = compile_program(gl);
+  gl.CreateBuffers(kBindingCount, m.buffers);
+  try {
+    m.allocate(gl, kPoints, layout.points.size() * sizeof(float), layout.points.data());
+    m.allocate(gl, kTetVertices, layout.tet_vertices.size() * 16, layout.tet_vertices.data());
+    m.allocate(gl, kTetNext, layout.tet_next.size() * 16, layout.tet_next.data());
+    m.allocate(gl, kScalars, s.scalar_bytes, nullptr);
+    m.allocate(gl, kTriangles, layout.triangles.size() * 16, layout.triangles.data());
+    m.allocate(gl, kNodes, layout.nodes.size() * sizeof(gpu::BvhNode), layout.nodes.data());
+  } catch (...) {
+    gl.DeleteBuffers(kBindingCount, m.buffers);
+    throw;
+  }
+  const std::vector<float> series = gpu::one_minus_z_series();
+  gl.ProgramUniform1fv(d.ray_cast_program, m.uniform(gl, "u_series"), 64, series.data());
+}
+
+GpuRayCaster::~GpuRayCaster() {
+  try {
+    CurrentContext current(m_impl->dev());
+    current.gl().DeleteBuffers(kBindingCount, m_impl->buffers);
+  } catch (...) {
+    // The context is gone with the device; nothing is left to free.
+  }
+}
+
+Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                           const RenderOptions& options) {
+  Impl& m = *m_impl;
+  detail::check_render_inputs("GpuRayCaster::render", *m.mesh, scalars, tf);
+  require(camera.width > 0 && camera.height > 0, "GpuRayCaster::render: camera image size " +
+                                                     std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                                                     "; expected positive width and height");
+  const double opacity = options.early_termination_opacity;
+  require(opacity > 0 && opacity <= 1, "GpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
+                                           "; expected a value in (0, 1]");
+  const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf);
+
+  GpuDevice::Impl& d = m.dev();
+  CurrentContext current(d);
+  const GlApi& gl = current.gl();
+  const GLuint program = d.ray_cast_program;
+  m.upload_scalars(gl, scalars);
+  const std::size_t tf_bytes = table.data.size() * sizeof(float);
+  if (m.capacity[kTf] < tf_bytes) m.allocate(gl, kTf, tf_bytes, nullptr);
+  gl.NamedBufferSubData(m.buffers[kTf], 0, static_cast<GLsizeiptr>(tf_bytes), table.data.data());
+  const int tile_w = std::min(camera.width, kTile), tile_h = std::min(camera.height, kTile);
+  const std::size_t tile_bytes = static_cast<std::size_t>(tile_w) * tile_h * 4 * sizeof(float);
+  if (m.capacity[kPixels] < tile_bytes) m.allocate(gl, kPixels, tile_bytes, nullptr);
+  m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels];
+  for (GLuint b = 0; b < kBindingCount; ++b) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, m.buffers[b]);
+
+  // The camera of Camera::primary_ray, relative to the mesh centre like the points.
+  const Vec3d forward = normalize(camera.target - camera.eye);
+  const Vec3d right = normalize(cross(forward, camera.up));
+  const Vec3d up = cross(right, forward);
+  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
+  const double half_w = half_h * camera.width / camera.height;
+  const Vec3d eye = camera.eye - m.center;
+  const Bounds& bb = m.mesh->bounds;
+  const double pad = 1e-9 * bb.diagonal();
+  const Vec3d& o = camera.eye;
+  const bool outside = o.x < bb.lo.x - pad || o.y < bb.lo.y - pad || o.z < bb.lo.z - pad || o.x > bb.hi.x + pad ||
+                       o.y > bb.hi.y + pad || o.z > bb.hi.z + pad;
+  // Depths are float32 relative to the eye: two faces' roundings of one exit depth differ by a
+  // few units of 1e-7 * (distance + size), far below this slack.
+  const double slack = 1e-5 * (m.diagonal + length(eye));
+  auto u3 = [&](const char* name, const Vec3d& v) {
+    gl.ProgramUniform3f(program, m.uniform(gl, name), static_cast<float>(v.x), static_cast<float>(v.y),
+                        static_cast<float>(v.z));
+  };
+  u3("u_eye", eye);
+  u3("u_forward", forward);
+  u3("u_right", right);
+  u3("u_up", up);
+  gl.ProgramUniform2f(program, m.uniform(gl, "u_half_extent"), static_cast<float>(half_w), static_cast<float>(half_h));
+  gl.ProgramUniform2i(program, m.uniform(gl, "u_image_size"), camera.width, camera.height);
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_eye_outside"), outside ? 1 : 0);
+  gl.ProgramUniform1f(program, m.uniform(gl, "u_reentry_slack"), static_cast<float>(slack));
+  gl.ProgramUniform1f(program, m.uniform(gl, "u_stop_transmittance"),
+                      static_cast<float>(opacity >= 1.0 ? 0.0 : 1.0 - opacity));
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_tet_count"), static_cast<GLint>(m.stats.tets));
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_triangle_count"), static_cast<GLint>(m.triangle_count));
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_breakpoint_count"), table.breakpoint_count);
+  gl.UseProgram(program);
+
+  Image image(camera.width, camera.height);
+  std::vector<float> tile(static_cast<std::size_t>(tile_w) * tile_h * 4);
+  for (int y0 = 0; y0 < camera.height; y0 += tile_h)
+    for (int x0 = 0; x0 < camera.width; x0 += tile_w) {
+      const int w = std::min(tile_w, camera.width - x0), h = std::min(tile_h, camera.height - y0);
+      gl.ProgramUniform2i(program, m.uniform(gl, "u_tile_origin"), x0, y0);
+      gl.ProgramUniform2i(program, m.uniform(gl, "u_tile_size"), w, h);
+      gl.DispatchCompute(static_cast<GLuint>((w + 7) / 8), static_cast<GLuint>((h + 7) / 8), 1);
+      gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      gl.GetNamedBufferSubData(m.buffers[kPixels], 0, static_cast<GLsizeiptr>(static_cast<std::size_t>(w) * h * 16),
+                               tile.data());
+      for (int y = 0; y < h; ++y)
+        std::memcpy(image.pixel(x0, y0 + y), &tile[static_cast<std::size_t>(y) * w * 4],
+                    static_cast<std::size_t>(w) * 4 * sizeof(float));
+    }
+  gl.UseProgram(0);
+  const GLenum err = gl.GetError();
+  if (err != GL_NO_ERROR)
+    throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
+                "GpuRayCaster::render: OpenGL reported " + gpu::gl_error_text(err));
+  return image;
+}
+
+GpuMemoryStats GpuRayCaster::memory() const { return m_impl->stats; }
+std::size_t GpuRayCaster::last_scalar_upload_bytes() const { return m_impl->last_upload; }
+const TetMesh& GpuRayCaster::mesh() const { return *m_impl->mesh; }
+const GpuDevice& GpuRayCaster::device() const { return *m_impl->device; }
+
+}  // namespace penumbra::render
