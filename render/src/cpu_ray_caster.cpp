@@ -57,6 +57,16 @@ struct WalkStats {
   int aborted = 0;
 };
 
+// Front to back. Usually one or two entries: insertion sort.
+void sort_entries(std::vector<Entry>& out) {
+  for (std::size_t i = 1; i < out.size(); ++i)
+    for (std::size_t j = i; j > 0 && out[j].t < out[j - 1].t; --j) std::swap(out[j], out[j - 1]);
+}
+
+// A screen bin with more boundary faces than this is searched through the BVH instead: testing
+// a face costs about 1/100 of a BVH search.
+constexpr std::int32_t kMaxBinFaces = 64;
+
 constexpr int kMaxZeroLengthSteps = 1024;
 // Relative to the mesh diagonal: stretches inside shorter than this are grazes, not entries.
 constexpr double kGrazeLength = 1e-12;
@@ -176,14 +186,15 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     out.push_back(en);
   };
   if constexpr (Geometry::kBinnedFaces) {
-    for (const std::int32_t* i = geo.faces_begin; i != geo.faces_end; ++i) test_face(*i);
-  } else {
-    bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, test_face);
+    if (geo.faces_begin != nullptr) {
+      for (const std::int32_t* i = geo.faces_begin; i != geo.faces_end; ++i) test_face(*i);
+      return sort_entries(out);
+    }
   }
-  // Usually one or two entries: insertion sort.
-  for (std::size_t i = 1; i < out.size(); ++i)
-    for (std::size_t j = i; j > 0 && out[j].t < out[j - 1].t; --j) std::swap(out[j], out[j - 1]);
+  bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, test_face);
+  sort_entries(out);
 }
+
 
 // Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
 template <bool kShaded, class Geometry>
@@ -382,11 +393,12 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
             m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           } else {
-            const std::int32_t* faces = bins.faces.data();
             const std::size_t b = static_cast<std::size_t>(y / bin) * bins_x + static_cast<std::size_t>(x / bin);
+            const bool few = bins.start[b + 1] - bins.start[b] <= kMaxBinFaces;
+            const std::int32_t* faces = bins.faces.data();
             m_impl->trace_ray(frame,
-                              ScreenGeometry(screen.data(), basis, ray.direction, faces + bins.start[b],
-                                             faces + bins.start[b + 1]),
+                              ScreenGeometry(screen.data(), basis, ray.direction, few ? faces + bins.start[b] : nullptr,
+                                             few ? faces + bins.start[b + 1] : nullptr),
                               table,
                               shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           }

@@ -74,7 +74,8 @@ struct ScreenGeometry {
   double sx, sy;        // the ray's point on the image plane
   double depth_scale;   // distance along the unit ray per unit of camera depth: 1 / (d . forward)
   /// Boundary faces come from the frame's screen tiles: those whose projection may cover the
-  /// ray's tile (a superset of the faces the ray crosses).
+  /// ray's tile (a superset of the faces the ray crosses); from the BVH when faces_begin is null
+  /// (a tile crowded with faces smaller than a pixel, where the BVH's logarithmic search wins).
   static constexpr bool kBinnedFaces = true;
   const std::int32_t* faces_begin = nullptr;
   const std::int32_t* faces_end = nullptr;
