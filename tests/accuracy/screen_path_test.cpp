@@ -60,6 +60,17 @@ TEST(ScreenPath, MeshInFrontMatchesPerRayWalk) {
   }
 }
 
+TEST(ScreenPath, TilesCrowdedWithSubPixelFacesUseTheBvh) {
+  // 8x8 pixels over ~2000 boundary faces: every 4x4-pixel bin holds hundreds of faces, so the
+  // frame finds entries through the BVH while still walking in screen space.
+  const auto owned = fixtures::tet_block_with_hole(9);
+  const auto mesh = test::prepare(owned);
+  int covered = 0;
+  EXPECT_LT(max_difference_to_traced_rays(owned, render::Camera::orbit(mesh->bounds, 37, 28, 35, 8, 8), covered),
+            kTolerance);
+  EXPECT_GT(covered, 10);
+}
+
 TEST(ScreenPath, HexMeshSplitIntoTetsMatchesPerRayWalk) {
   const auto owned = fixtures::block(BlockCells::hexes, 5, 4, 6, {-1, -1, -1}, {1, 0.5, 2});
   const auto mesh = test::prepare(owned);
