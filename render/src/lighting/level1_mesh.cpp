@@ -1,0 +1,93 @@
+// render/src/lighting/level1_mesh.cpp -- point-to-tet and point-to-point adjacency, tet gradients
+#include "level1_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "penumbra/core/thread_pool.h"
+
+namespace penumbra::render::lighting {
+
+Level1Topology::Level1Topology(const TetMesh& mesh) {
+  const std::size_t np = mesh.points.size(), nt = mesh.tets.size();
+  tet_offsets.assign(np + 1, 0);
+  for (const auto& tv : mesh.tets)
+    for (int k = 0; k < 4; ++k) ++tet_offsets[static_cast<std::size_t>(tv[k]) + 1];
+  for (std::size_t p = 0; p < np; ++p) tet_offsets[p + 1] += tet_offsets[p];
+  tet_ids.resize(static_cast<std::size_t>(tet_offsets[np]));
+  tet_local.resize(tet_ids.size());
+  std::vector<std::int64_t> fill(tet_offsets.begin(), tet_offsets.end() - 1);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const auto slot = static_cast<std::size_t>(fill[static_cast<std::size_t>(mesh.tets[t][k])]++);
+      tet_ids[slot] = static_cast<std::int32_t>(t);
+      tet_local[slot] = static_cast<std::int8_t>(k);
+    }
+
+  // Edge neighbours: the other three vertices of each incident tet, deduplicated per point.
+  edge_offsets.assign(np + 1, 0);
+  std::vector<std::vector<std::int32_t>> chunks(np);
+  std::vector<std::int64_t> counts(np, 0);
+  parallel_for(np, 1024, [&](std::size_t b, std::size_t e) {
+    std::vector<std::int32_t> tmp;
+    for (std::size_t p = b; p < e; ++p) {
+      tmp.clear();
+      for (auto s = tet_offsets[p]; s < tet_offsets[p + 1]; ++s) {
+        const auto& tv = mesh.tets[static_cast<std::size_t>(tet_ids[static_cast<std::size_t>(s)])];
+        for (int k = 0; k < 4; ++k)
+          if (static_cast<std::size_t>(tv[k]) != p) tmp.push_back(tv[k]);
+      }
+      std::sort(tmp.begin(), tmp.end());
+      tmp.erase(std::unique(tmp.begin(), tmp.end()), tmp.end());
+      chunks[p] = tmp;
+      counts[p] = static_cast<std::int64_t>(tmp.size());
+    }
+  });
+  for (std::size_t p = 0; p < np; ++p) edge_offsets[p + 1] = edge_offsets[p] + counts[p];
+  edge_ids.resize(static_cast<std::size_t>(edge_offsets[np]));
+  double sum = 0, smallest = HUGE_VAL;
+  std::size_t edges = 0;
+  longest_edge.assign(np, 0.0f);
+  for (std::size_t p = 0; p < np; ++p) {
+    std::copy(chunks[p].begin(), chunks[p].end(), edge_ids.begin() + edge_offsets[p]);
+    for (std::int32_t q : chunks[p]) {
+      const double d = length(mesh.points[static_cast<std::size_t>(q)] - mesh.points[p]);
+      longest_edge[p] = std::max(longest_edge[p], static_cast<float>(d));
+      if (static_cast<std::size_t>(q) < p) continue;  // each edge once
+      if (!(d > 0)) continue;
+      sum += d;
+      smallest = std::min(smallest, d);
+      ++edges;
+    }
+  }
+  mean_edge = edges ? sum / static_cast<double>(edges) : 0.0;
+  min_edge = edges ? smallest : 0.0;
+}
+
+void Level1Field::build(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf) {
+  table = ExtinctionTable(tf);
+  const std::size_t nt = mesh.tets.size();
+  base.resize(nt);
+  grad.resize(nt);
+  parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const auto& tv = mesh.tets[t];
+      const Vec3d& p0 = mesh.points[static_cast<std::size_t>(tv[0])];
+      const Vec3d e1 = mesh.points[static_cast<std::size_t>(tv[1])] - p0;
+      const Vec3d e2 = mesh.points[static_cast<std::size_t>(tv[2])] - p0;
+      const Vec3d e3 = mesh.points[static_cast<std::size_t>(tv[3])] - p0;
+      const double s0 = scalars[static_cast<std::size_t>(tv[0])];
+      const double d1 = scalars[static_cast<std::size_t>(tv[1])] - s0;
+      const double d2 = scalars[static_cast<std::size_t>(tv[2])] - s0;
+      const double d3 = scalars[static_cast<std::size_t>(tv[3])] - s0;
+      // Solve e_i . g = d_i by the adjugate: g = (d1 e2xe3 + d2 e3xe1 + d3 e1xe2) / det.
+      const double inv = 1.0 / dot(e1, cross(e2, e3));
+      grad[t] = (cross(e2, e3) * d1 + cross(e3, e1) * d2 + cross(e1, e2) * d3) * inv;
+      const bool nan = std::isnan(s0) || std::isnan(d1) || std::isnan(d2) || std::isnan(d3);
+      base[t] = nan ? std::nan("") : s0;
+      if (nan) grad[t] = {0, 0, 0};
+    }
+  });
+}
+
+}  // namespace penumbra::render::lighting

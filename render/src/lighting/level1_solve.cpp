@@ -1,0 +1,379 @@
+// render/src/lighting/level1_solve.cpp -- the tet walk and the ordered semi-Lagrangian passes
+#include "level1_solve.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "penumbra/core/thread_pool.h"
+#include "tet_geometry.h"
+
+namespace penumbra::render::lighting {
+namespace {
+
+// A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
+// a degenerate configuration (it then falls back to level 0 and is counted).
+constexpr int kMaxMoves = 200000;
+// Faces within this angle-sine of parallel to the segment are not exits.
+constexpr double kParallel = 1e-12;
+// interpolate_light: optical depth interpolated up to this change across the light within a tet
+// (a factor 4 in rho), rho interpolated linearly from the next (a factor 16).
+constexpr double kGeometricDepth = 1.3862943611198906;
+constexpr double kLinearDepth = 2.772588722239781;
+// Vertices per batch of a pass: the granularity at which a time budget can stop it.
+constexpr std::size_t kBatch = 2048;
+
+double segment_depth(const Level1Context& ctx, std::int32_t t, const Vec3d& x, const Vec3d& d, double ta, double tb) {
+  if (!(tb > ta)) return 0.0;
+  const auto tt = static_cast<std::size_t>(t);
+  const double base = ctx.field.base[tt];
+  if (std::isnan(base)) return 0.0;
+  // The scalar along the segment: s(x + t d) = s(x) + t (grad . d) within the tet.
+  const Vec3d& g = ctx.field.grad[tt];
+  const double s_x = base + dot(g, x - ctx.mesh.points[static_cast<std::size_t>(ctx.mesh.tets[tt][0])]);
+  const double slope = dot(g, d);
+  return ctx.field.table.integral(s_x + slope * ta, s_x + slope * tb, tb - ta);
+}
+
+}  // namespace
+
+double box_path_length(const Bounds& box, const Vec3d& x, const Light& light) {
+  Vec3d d;
+  double t1;
+  if (light.kind == Light::Kind::directional) {
+    d = -normalize(light.vector);
+    t1 = HUGE_VAL;
+  } else {
+    const Vec3d r = light.vector - x;
+    t1 = length(r);
+    if (!(t1 > 0)) return 0.0;
+    d = r / t1;
+  }
+  double t0 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0) {
+      if (x[a] < box.lo[a] || x[a] > box.hi[a]) return 0.0;
+      continue;
+    }
+    double ta = (box.lo[a] - x[a]) / d[a], tb = (box.hi[a] - x[a]) / d[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t1 > t0 ? t1 - t0 : 0.0;
+}
+
+double transverse_change(const Vec3d p[4], const double value[4], const Vec3d& u) {
+  const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+  const double det = dot(e1, cross(e2, e3));
+  const Vec3d g = (cross(e2, e3) * (value[1] - value[0]) + cross(e3, e1) * (value[2] - value[0]) +
+                   cross(e1, e2) * (value[3] - value[0])) / det;
+  const Vec3d across = g - u * dot(g, u);
+  double size = 0.0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) size = std::max(size, dot(p[b] - p[a], p[b] - p[a]));
+  return length(across) * std::sqrt(size);
+}
+
+double interpolate_light(const std::array<double, 4>& w, const double rho[4], const double path[4], double path_d,
+                         const Vec3d corner[4], const Vec3d& u) {
+  double lo = HUGE_VAL, linear = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    lo = std::min(lo, rho[k]);
+    linear += w[k] * rho[k];
+  }
+  if (!(lo > 0.0)) return linear;  // an exactly dark corner (occluder, flushed): a shadow edge
+  // Mean extinction along the rays: interpolated optical depth over interpolated path length.
+  double depth[4], depth_mean = 0.0, path_mean = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    depth[k] = -std::log(rho[k]);
+    depth_mean += w[k] * depth[k];
+    path_mean += w[k] * path[k];
+  }
+  if (!(path_mean > 0.0)) return path_d > 0.0 ? std::nan("") : linear;  // the caller walks on
+  const double m = depth_mean / path_mean;
+  double residual[4];
+  for (int k = 0; k < 4; ++k) residual[k] = depth[k] - m * path[k];
+  const double across = transverse_change(corner, residual, u);
+  const double beta = std::clamp((across - kGeometricDepth) / (kLinearDepth - kGeometricDepth), 0.0, 1.0);
+  const double geometric = std::exp(-m * path_d);
+  return (1.0 - beta) * geometric + beta * linear;
+}
+
+Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double seg_length,
+                    std::int32_t* start) {
+  const TetMesh& mesh = ctx.mesh;
+  const auto& topo = ctx.topology;
+  // Start: the incident tet into which d points most deeply. With e_j the tet's edges from v, d
+  // points into the tet when d = sum_j a_j e_j with every a_j >= 0; a_j = d . c_j / det with c_j
+  // the cross product of the other two edges, and a_j * h_j (h_j = |det| / |c_j|, the height of
+  // the tet over the face through v opposite e_j's end) is the cosine between d and that face's
+  // inward normal. The score is the smallest of the three; a score clearly positive (d strictly
+  // inside the tet's corner) ends the search, otherwise the best is taken.
+  std::int32_t tet = -1;
+  int local = 0;
+  double best = -HUGE_VAL;
+  if (start && *start == -2) return {Trace::Kind::left_mesh, -1, x, 0.0};
+  const bool cached = start && *start >= 0;
+  if (cached) {
+    tet = *start;
+    const auto& tv = mesh.tets[static_cast<std::size_t>(tet)];
+    while (local < 3 && tv[local] != v) ++local;
+    best = 1.0;
+  }
+  const auto s_begin = topo.tet_offsets[static_cast<std::size_t>(v)];
+  const auto s_end = cached ? s_begin : topo.tet_offsets[static_cast<std::size_t>(v) + 1];
+  for (auto s = s_begin; s < s_end; ++s) {
+    const std::int32_t t = topo.tet_ids[static_cast<std::size_t>(s)];
+    const int k = topo.tet_local[static_cast<std::size_t>(s)];
+    const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
+    Vec3d e[3];
+    for (int j = 0, n = 0; j < 4; ++j)
+      if (j != k) e[n++] = mesh.points[static_cast<std::size_t>(tv[j])] - x;
+    const Vec3d c[3] = {cross(e[1], e[2]), cross(e[2], e[0]), cross(e[0], e[1])};
+    const double sign = dot(e[0], c[0]) > 0 ? 1.0 : -1.0;  // the local order may be either handedness
+    double score = HUGE_VAL;
+    for (const Vec3d& cj : c) score = std::min(score, sign * dot(d, cj) / penumbra::length(cj));
+    if (score > best) {
+      best = score;
+      tet = t;
+      local = k;
+      if (best > 1e-3) break;
+    }
+  }
+  if (tet < 0 || best < -1e-10) {
+    if (start) *start = -2;
+    return {Trace::Kind::left_mesh, tet, x, 0.0};
+  }
+  if (start) *start = tet;
+
+  unsigned excluded = 0xFu & ~(1u << local);  // the faces through v
+  double t_in = 0.0, depth = 0.0;
+  for (int move = 0; move < kMaxMoves; ++move) {
+    double t_out = HUGE_VAL;
+    int exit = -1;
+    for (int j = 0; j < 4; ++j) {
+      if (excluded & (1u << j)) continue;
+      const FacePlane f = face_plane(mesh, tet, j);
+      const double den = dot(f.n, d);
+      if (den <= 0.0 || den * den <= kParallel * kParallel * dot(f.n, f.n)) continue;
+      const double tj = dot(f.n, f.a - x) / den;
+      if (tj < t_out) {
+        t_out = tj;
+        exit = j;
+      }
+    }
+    t_out = std::max(t_out, t_in);
+    if (t_out >= seg_length || exit < 0) {
+      depth += segment_depth(ctx, tet, x, d, t_in, seg_length);
+      return {Trace::Kind::inside, tet, x + d * seg_length, depth};
+    }
+    depth += segment_depth(ctx, tet, x, d, t_in, t_out);
+    const std::int32_t next = mesh.neighbors[static_cast<std::size_t>(tet)][exit];
+    if (next < 0) return {Trace::Kind::left_mesh, tet, x + d * t_out, depth};
+    excluded = 0;
+    for (int f = 0; f < 4; ++f)
+      if (mesh.neighbors[static_cast<std::size_t>(next)][f] == tet) excluded |= 1u << f;
+    tet = next;
+    t_in = t_out;
+  }
+  return {Trace::Kind::lost, tet, x + d * seg_length, depth};
+}
+
+VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
+  std::vector<std::pair<double, std::int32_t>> keyed;
+  keyed.reserve(mesh.points.size());
+  const Vec3d u = light.kind == Light::Kind::directional ? normalize(light.vector) : Vec3d{};
+  for (std::size_t p = 0; p < mesh.points.size(); ++p) {
+    if (topology.tet_offsets[p] == topology.tet_offsets[p + 1]) continue;  // in no tet
+    const Vec3d& x = mesh.points[p];
+    const double key = light.kind == Light::Kind::directional ? dot(x, u) : length(x - light.vector);
+    keyed.emplace_back(key, static_cast<std::int32_t>(p));
+  }
+  std::sort(keyed.begin(), keyed.end());
+  VertexOrder order;
+  order.vertices.reserve(keyed.size());
+  double group_start = -HUGE_VAL;
+  for (std::size_t i = 0; i < keyed.size(); ++i) {
+    if (keyed[i].first >= group_start + 0.5 * step) {
+      if (i > 0) order.group_end.push_back(i);
+      group_start = keyed[i].first;
+    }
+    order.vertices.push_back(keyed[i].second);
+  }
+  if (!keyed.empty()) order.group_end.push_back(keyed.size());
+  // Within a group any order is valid; a Morton (Z-order) curve keeps the walks of consecutive
+  // vertices in the same part of the mesh, and so of memory (sorted by key they would jump
+  // across the whole slab).
+  const Vec3d lo = mesh.bounds.lo, ext = mesh.bounds.hi - mesh.bounds.lo;
+  auto morton = [&](std::int32_t p) {
+    std::uint64_t code = 0;
+    const Vec3d& x = mesh.points[static_cast<std::size_t>(p)];
+    std::uint32_t c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = static_cast<std::uint32_t>(std::clamp(ext[a] > 0 ? (x[a] - lo[a]) / ext[a] : 0.0, 0.0, 1.0) * 1048575.0);
+    for (int bit = 19; bit >= 0; --bit)
+      for (int a = 0; a < 3; ++a) code = (code << 1) | ((c[a] >> bit) & 1u);
+    return code;
+  };
+  std::vector<std::uint64_t> codes(mesh.points.size(), 0);
+  for (std::int32_t p : order.vertices) codes[static_cast<std::size_t>(p)] = morton(p);
+  std::size_t group_begin = 0;
+  for (std::size_t end : order.group_end) {
+    std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(group_begin),
+              order.vertices.begin() + static_cast<std::ptrdiff_t>(end), [&](std::int32_t a, std::int32_t b) {
+                return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
+              });
+    group_begin = end;
+  }
+  order.group_of.assign(mesh.points.size(), -1);
+  std::size_t begin = 0;
+  for (std::size_t g = 0; g < order.group_end.size(); ++g) {
+    for (std::size_t i = begin; i < order.group_end[g]; ++i)
+      order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
+    begin = order.group_end[g];
+  }
+  return order;
+}
+
+bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
+                 const VertexOrder& order, std::vector<float>& rho1, PassState& state, std::atomic<std::size_t>& lost,
+                 std::chrono::steady_clock::time_point deadline) {
+  const TetMesh& mesh = ctx.mesh;
+  const bool point = light.kind == Light::Kind::point;
+  const Vec3d back = point ? Vec3d{} : -normalize(light.vector);
+  const std::size_t np = rho1.size();
+  if (state.start_tet.size() != np) state.start_tet.assign(np, -1);
+  if (!state.in_pass) {
+    state.full = state.departure_tet.size() != np;
+    if (state.full) {
+      state.departure_tet.assign(np, -1);
+      state.stale.assign(np, 1);
+    }
+    state.next.resize(np);
+    state.changed.assign(np, 0);
+    state.residual = 0.0;
+    state.next_group = 0;
+    state.next_vertex = 0;
+    state.in_pass = true;
+  }
+  const bool full = state.full;
+
+  auto departure_value = [&](const Trace& tr) {
+    const auto w = convex_weights(barycentric(mesh, tr.tet, tr.end));
+    const auto& tv = mesh.tets[static_cast<std::size_t>(tr.tet)];
+    double values[4], path[4];
+    Vec3d corner[4];
+    for (int k = 0; k < 4; ++k) {
+      const auto c = static_cast<std::size_t>(tv[k]);
+      values[k] = rho1[c];
+      corner[k] = mesh.points[c];
+      path[k] = box_path_length(mesh.bounds, corner[k], light);
+    }
+    const Vec3d u = point ? normalize(tr.end - light.vector) : -back;
+    return interpolate_light(w, values, path, box_path_length(mesh.bounds, tr.end, light), corner, u);
+  };
+
+  auto update = [&](std::int32_t v) -> float {
+    const Vec3d& x = mesh.points[static_cast<std::size_t>(v)];
+    for (const Bounds& box : ctx.occluders)
+      if (inside_box(x, box)) return 0.0f;
+    Vec3d d = back;
+    double len = ctx.step_of(static_cast<std::size_t>(v));
+    bool reaches_light = false;
+    if (point) {
+      const Vec3d r = light.vector - x;
+      const double dist = length(r);
+      if (dist == 0.0) return 1.0f;
+      d = r / dist;
+      // Near the light rho has a cone tip no interpolation follows: walk the rest of the way.
+      if (dist <= 2.0 * len) {
+        len = dist;
+        reaches_light = true;
+      }
+    }
+    Trace tr = trace_segment(ctx, v, x, d, len, &state.start_tet[static_cast<std::size_t>(v)]);
+    double upstream = 0.0;
+    const auto vv = static_cast<std::size_t>(v);
+    state.departure_tet[vv] = -1;
+    state.stale[vv] = 0;
+    if (tr.kind == Trace::Kind::inside && !reaches_light) {
+      state.departure_tet[vv] = tr.tet;
+      // A corner not in an earlier group was read before its update in this pass.
+      for (std::int32_t c : mesh.tets[static_cast<std::size_t>(tr.tet)])
+        if (order.group_of[static_cast<std::size_t>(c)] >= order.group_of[vv]) state.stale[vv] = 1;
+      upstream = departure_value(tr);
+      // A departure tet with every corner on the inflow boundary carries no extinction to
+      // interpolate from: walk on to where the ray leaves the mesh bounds instead.
+      if (std::isnan(upstream)) {
+        tr = trace_segment(ctx, v, x, d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
+        state.departure_tet[vv] = -1;
+        state.stale[vv] = 0;
+      }
+    }
+    switch (tr.kind) {
+      case Trace::Kind::inside:
+        if (reaches_light || std::isnan(upstream)) upstream = 1.0;
+        break;
+      case Trace::Kind::left_mesh:
+        upstream = ctx.grid.sample_prefer_outside(rho0, tr.end);
+        break;
+      default:
+        lost.fetch_add(1, std::memory_order_relaxed);
+        upstream = ctx.grid.sample(rho0, tr.end);
+        break;
+    }
+    for (const Bounds& box : ctx.occluders)
+      if (segment_meets_box(x, tr.end, box)) return 0.0f;
+    return static_cast<float>(flush(upstream * std::exp(-ctx.sigma_a * tr.depth)));
+  };
+
+  double residual = state.residual;
+  auto run = [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const std::int32_t v = order.vertices[i];
+      const auto vv = static_cast<std::size_t>(v);
+      // After the first pass a vertex whose inputs are unchanged keeps its value: only stale
+      // reads and the vertices downstream of a change are recomputed.
+      bool recompute = full || state.stale[vv];
+      if (!recompute && state.departure_tet[vv] >= 0)
+        for (std::int32_t c : mesh.tets[static_cast<std::size_t>(state.departure_tet[vv])])
+          recompute = recompute || state.changed[static_cast<std::size_t>(c)];
+      state.next[vv] = recompute ? update(v) : rho1[vv];
+    }
+  };
+  // Groups in order; a group's vertices in batches, in parallel within a batch. The deadline is
+  // checked between batches (always doing at least one): the vertices of a group read only
+  // earlier groups' final values, so a group may be finished on the next call; its new values
+  // are published when its last batch is done.
+  bool first_batch = true;
+  for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
+    const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
+    for (std::size_t b = std::max(begin, state.next_vertex); b < end; b += kBatch) {
+      if (!first_batch && std::chrono::steady_clock::now() >= deadline) {
+        state.next_group = g;
+        state.next_vertex = b;
+        state.residual = residual;
+        return false;
+      }
+      first_batch = false;
+      const std::size_t e = std::min(end, b + kBatch);
+      if (e - b < 256)
+        run(b, e);
+      else
+        parallel_for(e - b, 64, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });
+    }
+    state.next_vertex = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto v = static_cast<std::size_t>(order.vertices[i]);
+      const float change = std::fabs(state.next[v] - rho1[v]);
+      residual = std::max(residual, static_cast<double>(change));
+      state.changed[v] = change > 0.0f;
+      rho1[v] = state.next[v];
+    }
+  }
+  state.residual = residual;
+  state.in_pass = false;
+  return true;
+}
+
+}  // namespace penumbra::render::lighting

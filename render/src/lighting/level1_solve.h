@@ -1,0 +1,123 @@
+// render/src/lighting/level1_solve.h -- semi-Lagrangian steps (eq. 6-8) on the tet mesh
+#pragma once
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "level0_grid.h"
+#include "level1_mesh.h"
+#include "penumbra/render/light_volume.h"
+
+namespace penumbra::render::lighting {
+
+/// Everything one semi-Lagrangian pass reads.
+struct Level1Context {
+  const TetMesh& mesh;
+  const Level1Topology& topology;
+  const Level1Field& field;
+  const Level0Grid& grid;
+  const std::vector<Bounds>& occluders;
+  double sigma_a;
+  double step;           ///< h = c dt, world units
+  bool adaptive = true;  ///< each vertex steps at least twice its longest edge (see level1_step)
+  /// The step of vertex v: h, or with `adaptive` at least twice v's longest edge, so that its
+  /// departure tet lies wholly upstream and one ordered pass carries the light across coarse
+  /// cells too (with h far below a cell, each pass would move the light by h only). The steady
+  /// state does not depend on the step, so this changes convergence speed, not the answer
+  /// (beyond interpolation error, which longer steps reduce).
+  double step_of(std::size_t v) const {
+    return adaptive ? std::max(step, 2.0 * static_cast<double>(topology.longest_edge[v])) : step;
+  }
+};
+
+/// Result of walking the straight segment from a vertex towards the light.
+struct Trace {
+  enum class Kind { inside, left_mesh, lost } kind;
+  std::int32_t tet;  ///< tet holding `end` (inside) or the last tet walked
+  Vec3d end;         ///< departure point, or where the walk left the mesh
+  double depth;      ///< integral of tau over the walked part (exact)
+};
+
+/// Walks from point `v` (at x) along unit direction d for `length` through the tets. Starts in
+/// the incident tet that d points most deeply into, then leaves each tet through the face with
+/// the smallest crossing parameter among those d points out of; faces (nearly) parallel to d and
+/// the face just entered are never exits, so light parallel to faces and segments through
+/// vertices and edges walk on. Crossing parameters come from canonical face planes (see
+/// face_plane), so both tets of a face agree exactly.
+/// `start`, when given, caches the start tet for this vertex and direction (-1: unknown, -2: d
+/// leaves the mesh at v); it stays valid while the mesh and the light do.
+Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
+                    std::int32_t* start = nullptr);
+
+/// Length of the ray from x towards the light that lies inside `box` (the mesh bounds).
+double box_path_length(const Bounds& box, const Vec3d& x, const Light& light);
+
+/// rho at a departure point from the corners of its tet, weights w (convex). Attenuated light is
+/// exp(-optical depth D), and D is far smoother than rho. The departure point gets
+///     D_d = m path_d,  m = (sum w_k D_k) / (sum w_k path_k),
+/// path the length of the ray inside the mesh bounds (box_path_length): the interpolated depth,
+/// rescaled by how much longer the departure point's own path is than the interpolated one. Where
+/// the path is linear across the tet this is plain interpolation of D, exact behind and inside a
+/// thin absorber; where it has a kink (the ray's entry face changes inside the tet; a point
+/// light's cone tip) the rescaling follows it, so a homogeneous medium is exact for directional
+/// and point lights at any step length, where linear interpolation of rho errs at every step.
+/// m is a weighted mean of the corners' mean extinctions, >= 0, so the result is in [0, 1].
+/// Across a shadow edge the depth changes steeply *across* the light, beyond what the model
+/// D = m path explains; interpolating D there would let the dark side win and shadows grow by the
+/// numerical blur, so rho is interpolated linearly instead when that unexplained change
+/// perpendicular to the light (over the tet's longest edge) exceeds ln 16, blended from ln 4, and
+/// next to an exactly dark corner (occluder, or light flushed to zero). Both forms are bounded
+/// and do not oscillate. u is the light's direction of travel at the departure point.
+/// Returns NaN when every corner lies on the inflow boundary (no path, nothing to interpolate)
+/// but the departure point does not: the caller then walks on to the boundary.
+double interpolate_light(const std::array<double, 4>& w, const double rho[4], const double path[4], double path_d,
+                         const Vec3d corner[4], const Vec3d& u);
+
+/// Change of `value` (linear over the tet with corners p) perpendicular to direction u:
+/// |component of its gradient normal to u| times the tet's longest edge.
+double transverse_change(const Vec3d p[4], const double value[4], const Vec3d& u);
+
+/// Vertices sorted along the light (directional: by x . u; point: by distance from the light),
+/// cut into groups no thicker than step / 2: a departure point lies a full step upstream, so the
+/// tet holding it has its vertices in earlier groups unless it is thicker than step / 2.
+struct VertexOrder {
+  std::vector<std::int32_t> vertices;
+  std::vector<std::size_t> group_end;
+  std::vector<std::int32_t> group_of;  ///< per point; -1 for points in no tet
+};
+
+/// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
+/// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
+/// it (clear()) whenever the light, field or step changes.
+struct PassState {
+  std::vector<std::int32_t> start_tet;  ///< per vertex, see trace_segment; kept across clear()
+  std::vector<std::int32_t> departure_tet;
+  std::vector<std::uint8_t> stale, changed;
+  std::vector<float> next;
+  // A pass interrupted by its deadline resumes at next_group, vertex next_vertex of the order.
+  bool in_pass = false, full = false;
+  std::size_t next_group = 0, next_vertex = 0;
+  double residual = 0.0;  ///< largest change of the pass so far / of the last finished pass
+  void clear() {
+    departure_tet.clear();
+    in_pass = false;
+  }
+};
+VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step);
+
+/// One Gauss-Seidel pass of eq. 8 over the vertices in `order` (groups in order, the vertices
+/// of a group in parallel, reading the values of earlier groups already updated):
+///     rho(x) = rho(x_d) * exp(-sigma_a * integral of tau from x_d to x),  x_d = x - h u,
+/// rho(x_d) interpolated in level 1 (interpolate_light), the level-0 value where the walk left
+/// the mesh, 1 at the light. The first pass after a reset computes every vertex; later passes
+/// only the stale ones and those whose departure corners changed in this pass (the others would
+/// reproduce their value exactly). A pass stops between batches of vertices once `deadline` has
+/// passed and resumes there on the next call; returns true when the pass finished, its largest change then
+/// in state.residual. `lost` counts walks that hit their move cap.
+bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
+                 const VertexOrder& order, std::vector<float>& rho1, PassState& state, std::atomic<std::size_t>& lost,
+                 std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max());
+
+}  // namespace penumbra::render::lighting

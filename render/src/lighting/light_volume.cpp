@@ -1,0 +1,362 @@
+// render/src/lighting/light_volume.cpp -- Algorithm 1: incremental two-level light volume updates
+#include "penumbra/render/light_volume.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "level0_grid.h"
+#include "level0_sweep.h"
+#include "level1_mesh.h"
+#include "level1_solve.h"
+#include "light_scattering.h"
+#include "penumbra/core/error.h"
+#include "penumbra/core/thread_pool.h"
+
+namespace penumbra::render {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+void check_options(const LightVolumeOptions& o) {
+  const std::string call = "LightVolume: ";
+  require(o.level0_resolution >= 2,
+          call + "level0_resolution = " + std::to_string(o.level0_resolution) + "; expected >= 2");
+  require(std::isfinite(o.sigma_a) && o.sigma_a >= 0, call + "sigma_a = " + std::to_string(o.sigma_a) +
+                                                          "; expected a finite value >= 0");
+  for (double s : o.sigma_s)
+    require(std::isfinite(s) && s >= 0, call + "sigma_s has " + std::to_string(s) + "; expected finite values >= 0");
+  require(o.propagation_tolerance > 0 && o.scatter_tolerance > 0, call + "tolerances must be > 0");
+  require(std::isfinite(o.level1_step) && o.level1_step >= 0,
+          call + "level1_step = " + std::to_string(o.level1_step) + "; expected >= 0 (0 = automatic)");
+  require(o.level1_max_passes >= 1 && o.scatter_max_iterations >= 1, call + "iteration caps must be >= 1");
+  for (std::size_t i = 0; i < o.occluders.size(); ++i) {
+    const Bounds& b = o.occluders[i];
+    bool ok = !b.empty();
+    for (int a = 0; a < 3; ++a) ok = ok && std::isfinite(b.lo[a]) && std::isfinite(b.hi[a]) && b.lo[a] <= b.hi[a];
+    require(ok, call + "occluders[" + std::to_string(i) + "] is empty or not finite; expected lo <= hi");
+  }
+}
+
+void check_light(const Light& l, std::size_t i) {
+  const std::string at = "LightVolume::set_lights: lights[" + std::to_string(i) + "]";
+  bool finite = true;
+  for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(l.vector[a]);
+  require(finite, at + " has a non-finite vector; expected finite coordinates");
+  if (l.kind == Light::Kind::directional)
+    require(length(l.vector) > 0, at + " is directional with a zero direction; expected a non-zero vector");
+  for (double c : l.color)
+    require(std::isfinite(c) && c >= 0, at + " has colour channel " + std::to_string(c) + "; expected finite >= 0");
+}
+
+}  // namespace
+
+struct LightVolume::Impl {
+  struct LightState {
+    Light light;
+    enum class Stage { level0, level1, done } stage = Stage::level0;
+    std::vector<float> rho0;         // per level-0 node
+    std::vector<float> rho0_vertex;  // level 0 at the mesh points (initial values; warm-start reference)
+    std::vector<float> rho1;         // per mesh point
+    lighting::VertexOrder order;
+    lighting::PassState pass_state;
+    bool order_valid = false;
+    bool has_solution = false;
+    int passes = 0;
+    double residual = HUGE_VAL;
+    bool converged = false;  // false when the pass cap stopped it
+    // The light moved (or the step changed): its vertex order and start tets are stale.
+    void forget_direction() {
+      order_valid = false;
+      pass_state.start_tet.clear();
+    }
+  };
+
+  std::shared_ptr<const TetMesh> mesh;
+  LightVolumeOptions opt;
+  lighting::Level1Topology topology;
+  std::vector<float> scatter_weights;
+  lighting::Level0Grid grid;
+  lighting::Level1Field field;
+  std::vector<float> scalars;
+  bool has_field = false, resample_pending = false;
+  std::vector<LightState> lights;
+  std::vector<float> pre, rgb;
+  double pre_scale = 0;
+  bool combine_pending = true, scatter_done = false;
+  int scatter_iterations = 0;
+  double scatter_residual = HUGE_VAL;
+  bool scatter_converged = false;
+  bool has_rgb = false;
+  std::vector<float> scratch0;
+  double step = 0;
+  double last_level0_ms = 0, last_sweep_ms = 0;  // for the time budget's look-ahead
+
+  void build_grid() {
+    const auto dims = lighting::Level0Grid::choose_dims(mesh->bounds, opt.level0_resolution,
+                                                        opt.level0_memory_budget_bytes, std::max<std::size_t>(1, lights.size()));
+    grid = lighting::Level0Grid(*mesh, dims, opt.occluders);
+    step = opt.level1_step > 0 ? opt.level1_step : std::max(topology.mean_edge, grid.max_spacing());
+    resample_pending = has_field;
+    mark_all();
+    for (auto& l : lights) l.forget_direction();  // the step sets the vertex groups
+  }
+  void mark_all() {
+    for (auto& l : lights) l.stage = LightState::Stage::level0;
+  }
+  void solve_level0(LightState& l, LightUpdateReport& report) {
+    const auto t0 = Clock::now();
+    std::vector<float> rho0;
+    lighting::solve_level0(grid, l.light, opt.sigma_a, rho0, scratch0);
+    const std::size_t np = mesh->points.size();
+    std::vector<float> at_vertex(np);
+    parallel_for(np, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t p = b; p < e; ++p) at_vertex[p] = static_cast<float>(grid.sample(rho0, mesh->points[p]));
+    });
+    if (opt.mode == LightSolveMode::level0_only || !l.has_solution) {
+      l.rho1 = at_vertex;
+    } else {
+      // Warm start: keep the previous level-1 detail, scaled by how level 0 changed.
+      for (std::size_t p = 0; p < np; ++p) {
+        const double before = l.rho0_vertex[p];
+        const double v = before > 1e-6 ? l.rho1[p] * (at_vertex[p] / before) : at_vertex[p];
+        l.rho1[p] = static_cast<float>(std::clamp(v, 0.0, 1.0));
+      }
+    }
+    l.rho0 = std::move(rho0);
+    l.rho0_vertex = std::move(at_vertex);
+    l.has_solution = true;
+    l.pass_state.clear();  // the vertex order and start tets depend only on the light: kept
+    l.passes = 0;
+    l.residual = HUGE_VAL;
+    l.converged = opt.mode == LightSolveMode::level0_only;
+    l.stage = opt.mode == LightSolveMode::level0_only ? LightState::Stage::done : LightState::Stage::level1;
+    combine_pending = true;
+    ++report.lights_recomputed;
+    report.l0_prop_ms += ms_since(t0);
+  }
+  // Returns true when a whole pass finished (one work unit).
+  bool level1_pass(LightState& l, LightUpdateReport& report, Clock::time_point deadline) {
+    const auto t0 = Clock::now();
+    if (!l.order_valid) {
+      l.order = lighting::order_vertices(*mesh, topology, l.light, step);
+      l.order_valid = true;
+    }
+    const lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
+    std::atomic<std::size_t> lost{0};
+    const bool finished = lighting::level1_pass(ctx, l.light, l.rho0, l.order, l.rho1, l.pass_state, lost, deadline);
+    report.lost_traces += lost.load();
+    combine_pending = true;
+    report.l1_prop_ms += ms_since(t0);
+    if (!finished) return false;
+    // A pass moves the light by one step, so with steps far below an edge the change per pass
+    // is tiny long before the steady state: the residual is scaled to a light travel of one
+    // mean edge (with adaptive steps every step is at least two edges, and the scale is 1).
+    const double travel_scale = opt.level1_adaptive_step ? 1.0 : std::max(1.0, topology.mean_edge / step);
+    l.residual = l.pass_state.residual * travel_scale;
+    ++l.passes;
+    ++report.level1_passes;
+    l.converged = l.residual <= opt.propagation_tolerance;
+    if (l.converged || l.passes >= opt.level1_max_passes) l.stage = LightState::Stage::done;
+    return true;
+  }
+  void combine() {
+    const std::size_t np = mesh->points.size();
+    std::vector<float> previous_pre = std::move(pre);
+    pre.assign(3 * np, 0.0f);
+    for (const auto& l : lights) {
+      if (!l.has_solution) continue;
+      for (std::size_t p = 0; p < np; ++p)
+        for (int c = 0; c < 3; ++c) pre[3 * p + c] += static_cast<float>(l.rho1[p] * l.light.color[c]);
+    }
+    pre_scale = 0;
+    for (float v : pre)
+      if (std::isfinite(v)) pre_scale = std::max(pre_scale, static_cast<double>(std::fabs(v)));
+    const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
+    // Warm start: the previous scattered field plus the change of its source (exact when the
+    // source changed by a constant); the first time, the unscattered field.
+    if (!scatter || !has_rgb || previous_pre.size() != pre.size()) {
+      rgb = pre;
+    } else {
+      for (std::size_t i = 0; i < rgb.size(); ++i) {
+        const float delta = pre[i] - previous_pre[i];
+        if (std::isfinite(delta)) rgb[i] += delta;
+      }
+    }
+    has_rgb = true;
+    scatter_done = !scatter;
+    scatter_converged = !scatter;
+    scatter_residual = scatter ? HUGE_VAL : 0.0;
+    scatter_iterations = 0;
+    combine_pending = false;
+  }
+};
+
+LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions options)
+    : m_impl(std::make_unique<Impl>()) {
+  require(mesh != nullptr, "LightVolume: mesh is null; expected a prepared TetMesh");
+  require(!mesh->tets.empty(), "LightVolume: the mesh has no tets; expected at least one");
+  check_options(options);
+  Impl& im = *m_impl;
+  im.mesh = std::move(mesh);
+  im.opt = std::move(options);
+  im.topology = lighting::Level1Topology(*im.mesh);
+  im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
+  im.build_grid();
+  im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
+}
+
+LightVolume::~LightVolume() = default;
+LightVolume::LightVolume(LightVolume&&) noexcept = default;
+LightVolume& LightVolume::operator=(LightVolume&&) noexcept = default;
+
+void LightVolume::set_field(const std::vector<float>& point_scalars, const TransferFunction& tf) {
+  Impl& im = *m_impl;
+  require(point_scalars.size() == im.mesh->points.size(),
+          "LightVolume::set_field: point_scalars has " + std::to_string(point_scalars.size()) +
+              " values but the mesh has " + std::to_string(im.mesh->points.size()) + " points; expected one per point");
+  tf.validate();
+  im.scalars = point_scalars;
+  im.field.build(*im.mesh, im.scalars, tf);
+  im.has_field = true;
+  im.resample_pending = true;
+  im.mark_all();
+}
+
+void LightVolume::set_lights(std::vector<Light> lights) {
+  Impl& im = *m_impl;
+  for (std::size_t i = 0; i < lights.size(); ++i) check_light(lights[i], i);
+  const bool regrow = lighting::Level0Grid::bytes_per_node(lights.size()) * im.grid.size() > im.opt.level0_memory_budget_bytes;
+  std::vector<Impl::LightState> next(lights.size());
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    if (i < im.lights.size()) {
+      Impl::LightState& old = im.lights[i];
+      Light same_colour = lights[i];
+      same_colour.color = old.light.color;
+      const bool moved = !(same_colour == old.light);
+      next[i] = std::move(old);
+      if (moved) {
+        next[i].stage = Impl::LightState::Stage::level0;
+        next[i].forget_direction();
+      }
+    }
+    next[i].light = lights[i];
+  }
+  im.lights = std::move(next);
+  im.combine_pending = true;
+  if (regrow) im.build_grid();  // fewer nodes per light so the budget still holds
+}
+
+void LightVolume::set_absorption(double sigma_a) {
+  require(std::isfinite(sigma_a) && sigma_a >= 0,
+          "LightVolume::set_absorption: sigma_a = " + std::to_string(sigma_a) + "; expected a finite value >= 0");
+  m_impl->opt.sigma_a = sigma_a;
+  m_impl->mark_all();
+}
+
+void LightVolume::set_scattering(std::array<double, 3> sigma_s) {
+  for (double s : sigma_s)
+    require(std::isfinite(s) && s >= 0,
+            "LightVolume::set_scattering: sigma_s has " + std::to_string(s) + "; expected finite values >= 0");
+  m_impl->opt.sigma_s = sigma_s;
+  m_impl->combine_pending = true;
+}
+
+LightUpdateReport LightVolume::update(const LightBudget& budget) {
+  Impl& im = *m_impl;
+  if (!im.has_field)
+    throw Error(ErrorCode::invalid_operation, "LightVolume::update: no field yet; call set_field first");
+  const auto t0 = Clock::now();
+  LightUpdateReport report;
+  bool did_work = false;
+  if (im.resample_pending) {
+    const auto tr = Clock::now();
+    im.grid.resample(*im.mesh, im.scalars, im.field.table);
+    im.resample_pending = false;
+    report.resample_ms = ms_since(tr);
+    did_work = true;
+  }
+  // A piece of work starts only if it is expected (from its last duration) to end within the
+  // time budget; the first piece of a call always starts, so every call makes progress.
+  auto allowed = [&](double expected_ms) {
+    if (budget.max_work_units >= 0 && report.work_units >= budget.max_work_units) return false;
+    return !did_work || ms_since(t0) + expected_ms < budget.max_ms;
+  };
+  using Stage = Impl::LightState::Stage;
+  for (auto& l : im.lights) {
+    if (l.stage != Stage::level0) continue;
+    if (!allowed(im.last_level0_ms)) break;
+    const auto tl = Clock::now();
+    im.solve_level0(l, report);
+    im.last_level0_ms = ms_since(tl);
+    ++report.work_units;
+    did_work = true;
+  }
+  const auto deadline = std::isfinite(budget.max_ms)
+                            ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(budget.max_ms))
+                            : Clock::time_point::max();
+  for (auto& l : im.lights)
+    while (l.stage == Stage::level1 && allowed(0.0)) {
+      if (im.level1_pass(l, report, deadline)) ++report.work_units;
+      did_work = true;
+    }
+  if (im.combine_pending) im.combine();
+  if (!im.scatter_done) {
+    const auto ts = Clock::now();
+    const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
+    while (!im.scatter_done && allowed(im.last_sweep_ms)) {
+      const auto tw = Clock::now();
+      im.scatter_residual =
+          lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
+      im.last_sweep_ms = ms_since(tw);
+      did_work = true;
+      ++im.scatter_iterations;
+      ++report.scatter_iterations;
+      ++report.work_units;
+      im.scatter_converged = im.scatter_residual <= tolerance;
+      if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
+    }
+    report.l1_scatter_ms += ms_since(ts);
+  }
+  // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
+  // finished (nothing more will run until something changes) but not converged.
+  report.converged = im.scatter_done && im.scatter_converged;
+  report.residual = 0;
+  for (const auto& l : im.lights)
+    if (l.stage != Stage::done || !l.converged) {
+      report.converged = false;
+      report.residual = std::max(report.residual, l.residual);
+    }
+  if (!im.scatter_converged) report.residual = std::max(report.residual, im.scatter_residual);
+  report.total_ms = ms_since(t0);
+  return report;
+}
+
+const std::vector<float>& LightVolume::light_rgb() const { return m_impl->rgb; }
+
+const std::vector<float>& LightVolume::light_rho(std::size_t k) const {
+  require(k < m_impl->lights.size(), "LightVolume::light_rho: light " + std::to_string(k) + " does not exist");
+  return m_impl->lights[k].rho1;
+}
+
+const std::vector<float>& LightVolume::level0_rho(std::size_t k) const {
+  require(k < m_impl->lights.size(), "LightVolume::level0_rho: light " + std::to_string(k) + " does not exist");
+  return m_impl->lights[k].rho0;
+}
+
+Level0View LightVolume::level0() const {
+  const auto& g = m_impl->grid;
+  return {g.dims(), g.lo(), g.spacing(), &g.mask(), &g.tau()};
+}
+
+std::array<int, 3> LightVolume::level0_dims() const { return m_impl->grid.dims(); }
+double LightVolume::level1_step() const { return m_impl->step; }
+double LightVolume::mean_edge_length() const { return m_impl->topology.mean_edge; }
+const LightVolumeOptions& LightVolume::options() const { return m_impl->opt; }
+
+}  // namespace penumbra::render

@@ -1,0 +1,86 @@
+// render/src/lighting/tet_geometry.h -- small exact-as-possible tet helpers shared by the solver
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "penumbra/render/tet_mesh.h"
+
+namespace penumbra::render::lighting {
+
+/// Local vertices of face j (the face opposite vertex j).
+inline constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+/// Plane of face j of tet t: outward normal n (not unit) and a point a on it. Computed from the
+/// face's vertices sorted by global id, so the two tets sharing a face get exactly opposite
+/// normals and the same point: a line crossing the face gets the same parameter from both.
+struct FacePlane {
+  Vec3d n, a;
+};
+inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j) {
+  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
+  std::int32_t f0 = tv[kFaceVertices[j][0]], f1 = tv[kFaceVertices[j][1]], f2 = tv[kFaceVertices[j][2]];
+  if (f0 > f1) std::swap(f0, f1);
+  if (f1 > f2) std::swap(f1, f2);
+  if (f0 > f1) std::swap(f0, f1);
+  const Vec3d& a = mesh.points[static_cast<std::size_t>(f0)];
+  const Vec3d& b = mesh.points[static_cast<std::size_t>(f1)];
+  const Vec3d& c = mesh.points[static_cast<std::size_t>(f2)];
+  Vec3d n = cross(b - a, c - a);
+  if (dot(n, mesh.points[static_cast<std::size_t>(tv[j])] - a) > 0) n = -n;
+  return {n, a};
+}
+
+/// Barycentric coordinates of p in tet t by signed volumes (sum to 1 up to rounding).
+inline std::array<double, 4> barycentric(const TetMesh& mesh, std::int32_t t, const Vec3d& p) {
+  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
+  Vec3d q[4];
+  for (int k = 0; k < 4; ++k) q[k] = mesh.points[static_cast<std::size_t>(tv[k])];
+  const double inv = 1.0 / signed_volume6(q[0], q[1], q[2], q[3]);
+  return {signed_volume6(p, q[1], q[2], q[3]) * inv, signed_volume6(q[0], p, q[2], q[3]) * inv,
+          signed_volume6(q[0], q[1], p, q[3]) * inv, signed_volume6(q[0], q[1], q[2], p) * inv};
+}
+
+/// Barycentric weights clamped to >= 0 and renormalised: interpolation stays a convex
+/// combination even for a point a rounding error outside the tet.
+inline std::array<double, 4> convex_weights(std::array<double, 4> w) {
+  double sum = 0;
+  for (double& x : w) {
+    x = x > 0 ? x : 0;
+    sum += x;
+  }
+  if (!(sum > 0)) return {0.25, 0.25, 0.25, 0.25};
+  for (double& x : w) x /= sum;
+  return w;
+}
+
+/// True when the segment p0 + t (p1 - p0), t in [0, 1], meets the closed box.
+inline bool segment_meets_box(const Vec3d& p0, const Vec3d& p1, const Bounds& box) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = p1[a] - p0[a];
+    if (d == 0.0) {
+      if (p0[a] < box.lo[a] || p0[a] > box.hi[a]) return false;
+      continue;
+    }
+    double ta = (box.lo[a] - p0[a]) / d, tb = (box.hi[a] - p0[a]) / d;
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+inline bool inside_box(const Vec3d& p, const Bounds& box) {
+  return p.x >= box.lo.x && p.x <= box.hi.x && p.y >= box.lo.y && p.y <= box.hi.y && p.z >= box.lo.z &&
+         p.z <= box.hi.z;
+}
+
+/// Values below this are stored as exact zeros: far below anything visible, and it keeps
+/// denormals (slow on most CPUs) out of the sweeps.
+inline constexpr double kFlushToZero = 1e-30;
+inline double flush(double v) { return v < kFlushToZero ? 0.0 : v; }
+
+}  // namespace penumbra::render::lighting

@@ -1,0 +1,157 @@
+// render/src/lighting/transmittance_reference.cpp -- double-precision transmittance to a light
+//
+// Independent of the solver: no adjacency walk, no level-0 grid and no ExtinctionTable. The ray
+// from x to the light is clipped against every tet a BVH over all tets reports; a ray lying in a
+// face plane is displaced by (eps u + eps^2 v) (u, v perpendicular to the ray), so of the tets
+// sharing that face or edge exactly one contains it. Each clipped interval is cut where the
+// scalar crosses a transfer-function breakpoint; on each piece tau is linear in the distance and
+// its integral is tau(midpoint) * length, exactly.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "bvh.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/light_volume.h"
+
+namespace penumbra::render {
+namespace {
+
+constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+struct Line {
+  Vec3d o, d, u, v;
+  double t_max;
+};
+
+bool clip(const TetMesh& mesh, std::int32_t t, const Line& r, double& lo, double& hi) {
+  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
+  lo = 0.0;
+  hi = r.t_max;
+  for (const auto& f : kFaces) {
+    const Vec3d& a = mesh.points[static_cast<std::size_t>(tv[f[0]])];
+    const Vec3d& b = mesh.points[static_cast<std::size_t>(tv[f[1]])];
+    const Vec3d& c = mesh.points[static_cast<std::size_t>(tv[f[2]])];
+    const Vec3d n = cross(b - a, c - a);  // outward
+    const double h0 = dot(n, r.o - a), hd = dot(n, r.d);
+    if (hd < 0) {
+      lo = std::max(lo, -h0 / hd);
+    } else if (hd > 0) {
+      hi = std::min(hi, -h0 / hd);
+    } else {
+      const double nu = dot(n, r.u), nv = dot(n, r.v);
+      if (!(h0 < 0 || (h0 == 0 && (nu < 0 || (nu == 0 && nv <= 0))))) return false;
+    }
+    if (!(hi > lo)) return false;
+  }
+  return true;
+}
+
+double scalar_at(const TetMesh& mesh, const std::vector<float>& s, std::int32_t t, const Vec3d& x) {
+  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
+  Vec3d p[4];
+  for (int k = 0; k < 4; ++k) p[k] = mesh.points[static_cast<std::size_t>(tv[k])];
+  const double vol = signed_volume6(p[0], p[1], p[2], p[3]);
+  double sum = 0;
+  for (int k = 0; k < 4; ++k) {
+    Vec3d q[4] = {p[0], p[1], p[2], p[3]};
+    q[k] = x;
+    sum += signed_volume6(q[0], q[1], q[2], q[3]) / vol * static_cast<double>(s[static_cast<std::size_t>(tv[k])]);
+  }
+  return sum;
+}
+
+double interval_depth(const TransferFunction& tf, const std::vector<double>& breaks, double s0, double s1, double len) {
+  if (std::isnan(s0) || std::isnan(s1) || !(len > 0)) return 0.0;
+  std::vector<double> cuts{0.0, 1.0};
+  for (double x : breaks)
+    if ((x > s0 && x < s1) || (x < s0 && x > s1)) cuts.push_back((x - s0) / (s1 - s0));
+  std::sort(cuts.begin(), cuts.end());
+  double depth = 0;
+  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+    const double fm = 0.5 * (cuts[i] + cuts[i + 1]);
+    depth += tf.extinction(s0 + (s1 - s0) * fm) * (cuts[i + 1] - cuts[i]) * len;
+  }
+  return depth;
+}
+
+Line line_to(const Light& light, const Vec3d& x) {
+  Line r;
+  r.o = x;
+  if (light.kind == Light::Kind::directional) {
+    r.d = -normalize(light.vector);
+    r.t_max = std::numeric_limits<double>::infinity();
+  } else {
+    const Vec3d to = light.vector - x;
+    r.t_max = length(to);
+    r.d = r.t_max > 0 ? to / r.t_max : Vec3d{1, 0, 0};
+  }
+  const Vec3d helper = std::fabs(r.d.x) < 0.5 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+  r.u = normalize(cross(helper, r.d));
+  r.v = cross(r.d, r.u);
+  return r;
+}
+
+bool ray_meets_box(const Line& r, const Bounds& box) {
+  double t0 = 0.0, t1 = r.t_max;
+  for (int a = 0; a < 3; ++a) {
+    if (r.d[a] == 0.0) {
+      if (r.o[a] < box.lo[a] || r.o[a] > box.hi[a]) return false;
+      continue;
+    }
+    double ta = (box.lo[a] - r.o[a]) / r.d[a], tb = (box.hi[a] - r.o[a]) / r.d[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+struct LightTransmittanceReference::Impl {
+  std::shared_ptr<const TetMesh> mesh;
+  detail::Bvh bvh;
+};
+
+LightTransmittanceReference::LightTransmittanceReference(std::shared_ptr<const TetMesh> mesh)
+    : m_impl(std::make_unique<Impl>()) {
+  require(mesh != nullptr, "LightTransmittanceReference: mesh is null");
+  std::vector<Bounds> boxes(mesh->tets.size());
+  for (std::size_t t = 0; t < boxes.size(); ++t)
+    for (int k = 0; k < 4; ++k) boxes[t].extend(mesh->points[static_cast<std::size_t>(mesh->tets[t][k])]);
+  m_impl->bvh = detail::Bvh(boxes, 1e-9 * std::max(mesh->bounds.diagonal(), 1e-300), 4);
+  m_impl->mesh = std::move(mesh);
+}
+
+LightTransmittanceReference::~LightTransmittanceReference() = default;
+
+double LightTransmittanceReference::optical_depth(const std::vector<float>& scalars, const TransferFunction& tf,
+                                                  const Light& light, const Vec3d& x) const {
+  const TetMesh& mesh = *m_impl->mesh;
+  require(scalars.size() == mesh.points.size(), "LightTransmittanceReference: expected one scalar per point");
+  const Line r = line_to(light, x);
+  if (!(r.t_max > 0)) return 0.0;
+  const std::vector<double> breaks = tf.breakpoints();
+  double depth = 0;
+  m_impl->bvh.for_each_on_line(r.o, r.d, 0.0, r.t_max, [&](std::int32_t t) {
+    double lo, hi;
+    if (!clip(mesh, t, r, lo, hi)) return;
+    const double s0 = scalar_at(mesh, scalars, t, r.o + r.d * lo);
+    const double s1 = scalar_at(mesh, scalars, t, r.o + r.d * hi);
+    depth += interval_depth(tf, breaks, s0, s1, hi - lo);
+  });
+  return depth;
+}
+
+double LightTransmittanceReference::transmittance(const std::vector<float>& scalars, const TransferFunction& tf,
+                                                  double sigma_a, const Light& light, const Vec3d& x,
+                                                  const std::vector<Bounds>& occluders) const {
+  const Line r = line_to(light, x);
+  for (const Bounds& box : occluders)
+    if (ray_meets_box(r, box)) return 0.0;
+  return std::exp(-sigma_a * optical_depth(scalars, tf, light, x));
+}
+
+}  // namespace penumbra::render

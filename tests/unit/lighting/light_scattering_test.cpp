@@ -1,0 +1,133 @@
+// tests/unit/lighting/light_scattering_test.cpp -- eq. 9 (combining lights) and eq. 12 (diffusion)
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "lighting/level1_mesh.h"
+#include "lighting/light_scattering.h"
+#include "lighting_test_util.h"
+
+namespace penumbra::lighting_test {
+namespace {
+
+struct Scene {
+  std::shared_ptr<const TetMesh> mesh = tet_block(8, 8, 8, {0, 0, 0}, {1, 1, 1});
+  TransferFunction tf = ramp_tf(3.0);
+  std::vector<float> s = field(*mesh, [](const Vec3d& p) { return 0.5 + 0.5 * std::sin(4 * p.x) * std::cos(3 * p.y + p.z); });
+};
+
+std::vector<float> solve(const Scene& sc, std::vector<Light> lights, std::array<double, 3> sigma_s,
+                         const render::LightBudget& budget = {}) {
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  opt.sigma_s = sigma_s;
+  opt.scatter_tolerance = 1e-7;
+  LightVolume lv(sc.mesh, opt);
+  lv.set_field(sc.s, sc.tf);
+  lv.set_lights(std::move(lights));
+  for (int frame = 0; frame < 10000; ++frame)
+    if (lv.update(budget).converged) return lv.light_rgb();
+  ADD_FAILURE() << "did not converge";
+  return lv.light_rgb();
+}
+
+// Eq. 9 and 12 are linear in the lights: L(l1 + l2) = L(l1) + L(l2), per channel, to the
+// scattering tolerance (1e-7 relative per iteration).
+TEST(LightScattering, LinearInTheLights) {
+  const Scene sc;
+  const Light a = directional({1, 0.3, -0.2}, {1.0, 0.5, 0.2});
+  const Light b = point_light({0.3, 1.4, 0.6}, {0.1, 0.4, 0.9});
+  const auto la = solve(sc, {a}, {0.5, 1.0, 2.0});
+  const auto lb = solve(sc, {b}, {0.5, 1.0, 2.0});
+  const auto lab = solve(sc, {a, b}, {0.5, 1.0, 2.0});
+  double worst = 0;
+  for (std::size_t i = 0; i < lab.size(); ++i) worst = std::max(worst, static_cast<double>(std::fabs(lab[i] - la[i] - lb[i])));
+  EXPECT_LT(worst, 1e-4);
+}
+
+// The blur depends on sigma_s, not on how the iterations are spread over frames: one iteration
+// per frame converges to the same field as an unlimited budget.
+TEST(LightScattering, BlurIndependentOfIterationBudget) {
+  const Scene sc;
+  const Light a = directional({0.2, 1, 0.4});
+  const auto all_at_once = solve(sc, {a}, {1, 1, 1});
+  render::LightBudget one;
+  one.max_work_units = 1;
+  const auto one_per_frame = solve(sc, {a}, {1, 1, 1}, one);
+  double worst = 0;
+  for (std::size_t i = 0; i < all_at_once.size(); ++i)
+    worst = std::max(worst, static_cast<double>(std::fabs(all_at_once[i] - one_per_frame[i])));
+  EXPECT_LT(worst, 1e-5);
+  // ... and more scattering blurs more: the field's spread shrinks as sigma_s grows.
+  auto spread = [](const std::vector<float>& rgb) {
+    float lo = 1e30f, hi = -1e30f;
+    for (std::size_t i = 0; i < rgb.size(); i += 3) {
+      lo = std::min(lo, rgb[i]);
+      hi = std::max(hi, rgb[i]);
+    }
+    return hi - lo;
+  };
+  const auto none = solve(sc, {a}, {0, 0, 0});
+  const auto strong = solve(sc, {a}, {10, 10, 10});
+  EXPECT_GT(spread(none), spread(all_at_once));
+  EXPECT_GT(spread(all_at_once), spread(strong));
+}
+
+// A constant field stays constant, and the diffusion adds no new extrema: the result lies within
+// the range of the unscattered field, channel by channel.
+TEST(LightScattering, ConstantsStayAndNoNewExtrema) {
+  const Scene sc;
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  opt.sigma_a = 0;  // no absorption: rho = 1 everywhere
+  opt.sigma_s = {3, 3, 3};
+  opt.scatter_tolerance = 1e-7;
+  LightVolume lv(sc.mesh, opt);
+  lv.set_field(sc.s, sc.tf);
+  lv.set_lights({directional({1, 1, 1}, {0.25, 0.5, 0.75})});
+  EXPECT_TRUE(lv.update().converged);
+  for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(lv.light_rgb()[3 * p + c], 0.25 * (c + 1), 1e-6);
+
+  const auto before = solve(sc, {directional({1, -0.5, 0.3})}, {0, 0, 0});
+  const auto after = solve(sc, {directional({1, -0.5, 0.3})}, {4, 4, 4});
+  const auto used = used_points(*sc.mesh);
+  float lo = 1e30f, hi = -1e30f;
+  for (std::size_t i = 0; i < before.size(); i += 3) {
+    lo = std::min(lo, before[i]);
+    hi = std::max(hi, before[i]);
+  }
+  for (std::size_t i = 0; i < after.size(); i += 3) {
+    EXPECT_GE(after[i], lo - 1e-6f);
+    EXPECT_LE(after[i], hi + 1e-6f);
+  }
+}
+
+// One NaN scalar: its tets have no data (zero extinction), the light stays finite everywhere
+// and so does the scattered colour.
+TEST(LightScattering, NanVertexDoesNotSpread) {
+  Scene sc;
+  sc.s[sc.mesh->points.size() / 2] = std::nanf("");
+  const auto rgb = solve(sc, {directional({1, 0.2, 0.1})}, {2, 2, 2});
+  for (float v : rgb) ASSERT_TRUE(std::isfinite(v));
+}
+
+// The diffusion sweep itself, fed a non-finite pre-diffusion value: the NaN point is left out
+// of its neighbours' sums and itself takes their weighted mean, so nothing becomes NaN.
+TEST(LightScattering, SweepExcludesNonFiniteValues) {
+  const auto mesh = tet_block(4, 4, 4, {0, 0, 0}, {1, 1, 1});
+  const render::lighting::Level1Topology topo(*mesh);
+  const auto w = render::lighting::scatter_weights(*mesh, topo);
+  std::vector<float> pre(3 * mesh->points.size(), 0.5f);
+  pre[3 * 30 + 1] = std::nanf("");
+  pre[3 * 40] = INFINITY;
+  std::vector<float> cur = pre, scratch;
+  for (int it = 0; it < 50; ++it) render::lighting::scatter_sweep(topo, w, pre, {1, 1, 1}, cur, scratch);
+  for (float v : cur) {
+    ASSERT_TRUE(std::isfinite(v));
+    EXPECT_NEAR(v, 0.5f, 1e-6f);  // a constant field, with two holes in it, stays constant
+  }
+}
+
+}  // namespace
+}  // namespace penumbra::lighting_test

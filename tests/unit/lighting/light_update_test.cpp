@@ -1,0 +1,131 @@
+// tests/unit/lighting/light_update_test.cpp -- incremental updates (Algorithm 1), budgets, errors
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "penumbra/core/error.h"
+#include "lighting_test_util.h"
+
+namespace penumbra::lighting_test {
+namespace {
+
+std::shared_ptr<const TetMesh> cube() { return tet_block(8, 8, 8, {0, 0, 0}, {1, 1, 1}); }
+
+// Only the light that changed is recomputed; a colour-only change recombines without
+// recomputing; a transfer-function change recomputes every light.
+TEST(LightUpdate, OnlyChangedLightsRecompute) {
+  const auto mesh = cube();
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  LightVolume lv(mesh, opt);
+  const auto s = field(*mesh, [](const Vec3d& p) { return p.x; });
+  lv.set_field(s, ramp_tf(2.0));
+  std::vector<Light> lights{directional({1, 0, 0}), directional({0, 1, 0}), point_light({0.5, 0.5, 2})};
+  lv.set_lights(lights);
+  EXPECT_EQ(lv.update().lights_recomputed, 3);
+  EXPECT_EQ(lv.update().lights_recomputed, 0);  // nothing changed
+  lights[1].vector = {0, 1, 0.2};
+  lv.set_lights(lights);
+  auto r = lv.update();
+  EXPECT_EQ(r.lights_recomputed, 1);
+  EXPECT_TRUE(r.converged);
+  lights[2].color = {0.2, 0.2, 0.2};
+  lv.set_lights(lights);
+  EXPECT_EQ(lv.update().lights_recomputed, 0);
+  lv.set_field(s, ramp_tf(1.0));
+  EXPECT_EQ(lv.update().lights_recomputed, 3);
+  lights.pop_back();
+  lv.set_lights(lights);
+  EXPECT_EQ(lv.update().lights_recomputed, 0);
+}
+
+// A per-frame budget of one work unit: every frame stays within it, the residual is reported
+// while the solve is unfinished, and the light converges over frames to the unlimited result.
+TEST(LightUpdate, BudgetSpreadsWorkOverFrames) {
+  const auto mesh = cube();
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  opt.sigma_s = {1, 1, 1};
+  opt.scatter_tolerance = 1e-8;  // the two runs start their iterations from different states
+  const auto s = field(*mesh, [](const Vec3d& p) { return 0.5 + 0.5 * std::sin(5 * p.y); });
+  LightVolume full(mesh, opt), stepped(mesh, opt);
+  for (auto* lv : {&full, &stepped}) {
+    lv->set_field(s, ramp_tf(2.0));
+    lv->set_lights({directional({1, 0.3, 0.1}), point_light({1.5, 0.5, 0.5})});
+  }
+  ASSERT_TRUE(full.update().converged);
+  render::LightBudget budget;
+  budget.max_work_units = 1;
+  int frames = 0;
+  for (; frames < 1000; ++frames) {
+    const auto r = stepped.update(budget);
+    EXPECT_LE(r.work_units, 1);
+    if (r.converged) break;
+    EXPECT_GT(r.residual, 0.0);
+  }
+  EXPECT_LT(frames, 1000);
+  for (std::size_t i = 0; i < full.light_rgb().size(); ++i)
+    ASSERT_NEAR(stepped.light_rgb()[i], full.light_rgb()[i], 1e-5);
+  // A time budget is honoured too: a zero budget still makes progress (the first piece of work
+  // always runs) but starts nothing more.
+  stepped.set_lights({directional({0, 0, 1})});
+  render::LightBudget zero_time;
+  zero_time.max_ms = 0;
+  const auto r0 = stepped.update(zero_time);
+  EXPECT_EQ(r0.work_units, 1);
+  EXPECT_EQ(r0.lights_recomputed, 1);
+  EXPECT_FALSE(r0.converged);
+}
+
+// A field jump between time steps: warm-starting from the previous light converges in no more
+// passes than a cold start on the new field, to the same light.
+TEST(LightUpdate, FieldJumpWarmStartNoSlowerThanCold) {
+  const auto mesh = tet_block(10, 10, 10, {0, 0, 0}, {1, 1, 1});
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  const auto before = field(*mesh, [](const Vec3d& p) { return 0.5 + 0.5 * std::sin(6 * p.x); });
+  const auto after = field(*mesh, [](const Vec3d& p) { return 0.5 + 0.5 * std::cos(5 * p.y + 2 * p.z); });
+  const Light light = directional({1, 0.4, 0.3});
+  LightVolume warm(mesh, opt), cold(mesh, opt);
+  warm.set_field(before, ramp_tf(3.0));
+  warm.set_lights({light});
+  ASSERT_TRUE(warm.update().converged);
+  warm.set_field(after, ramp_tf(3.0));
+  const auto rw = warm.update();
+  cold.set_field(after, ramp_tf(3.0));
+  cold.set_lights({light});
+  const auto rc = cold.update();
+  ASSERT_TRUE(rw.converged && rc.converged);
+  std::printf("passes after the jump: warm %d, cold %d\n", rw.level1_passes, rc.level1_passes);
+  EXPECT_LE(rw.level1_passes, rc.level1_passes);
+  for (std::size_t p = 0; p < mesh->points.size(); ++p) ASSERT_NEAR(warm.light_rho(0)[p], cold.light_rho(0)[p], 1e-4);
+}
+
+// Level-0 memory budget: a resolution that does not fit is reduced, one that cannot fit at all
+// is a clear error; bad options and inputs are errors, never aborts.
+TEST(LightUpdate, BudgetAndInputErrors) {
+  const auto mesh = cube();
+  LightVolumeOptions opt;
+  opt.level0_resolution = 200;
+  opt.level0_memory_budget_bytes = 1 << 20;  // 1 MiB: about 39^3 nodes at 17 bytes each (one light)
+  LightVolume lv(mesh, opt);
+  const auto dims = lv.level0_dims();
+  EXPECT_LT(dims[0], 200);
+  EXPECT_GE(dims[0], 32);
+  EXPECT_LE(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2] * 17, opt.level0_memory_budget_bytes);
+
+  opt.level0_memory_budget_bytes = 100;
+  EXPECT_THROW(LightVolume(mesh, opt), Error);
+  LightVolumeOptions bad;
+  bad.sigma_a = -1;
+  EXPECT_THROW(LightVolume(mesh, bad), Error);
+  EXPECT_THROW(LightVolume(nullptr, LightVolumeOptions{}), Error);
+  LightVolume ok(mesh, LightVolumeOptions{});
+  EXPECT_THROW(ok.update(), Error);  // no field yet
+  EXPECT_THROW(ok.set_field(std::vector<float>(3, 0.0f), ramp_tf(1)), Error);
+  EXPECT_THROW(ok.set_lights({directional({0, 0, 0})}), Error);
+  EXPECT_THROW(ok.set_lights({point_light({NAN, 0, 0})}), Error);
+}
+
+}  // namespace
+}  // namespace penumbra::lighting_test
