@@ -1,0 +1,190 @@
+// render/src/occlusion/cone_tracer.cpp -- Gaussian cone tracing (thesis sec. 3.2.2-3.2.4, app. A)
+//
+// The sample schedule (distance, level, cone count, trapezoid weight, section weight) depends only
+// on the options and sigma0, so it is built once, like the thesis's 1D texture; tracing a cone
+// then costs one trilinear fetch per sample and sub-cone.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "penumbra/core/error.h"
+#include "penumbra/render/occlusion.h"
+
+namespace penumbra::render {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// "Circle packing in a circle" (thesis fig. 3.5): 3 circles of radius 1 / (1 + 2 / sqrt 3) with
+// centres at 1 - that radius; 7 circles of radius 1/3, one central and six with centres at 2/3.
+const double kRadius3 = 1.0 / (1.0 + 2.0 / std::sqrt(3.0));
+const double kOffset3 = 1.0 - kRadius3;
+constexpr double kRadius7 = 1.0 / 3.0;
+constexpr double kOffset7 = 2.0 / 3.0;
+// Depth beyond which exp(-depth) is below float resolution of any shading result.
+constexpr double kOpaqueDepth = 40.0;
+
+double section_weight(SectionWeight model, double r, double sigma, double alpha) {
+  if (model == SectionWeight::mean) return alpha;
+  // eq. 3-15: (p_r sigma sqrt(2 pi))^2 / (pi r^2), p_r = erf(r / (sigma sqrt 2)); r -> 0 gives 4/pi.
+  const double x = r / (sigma * std::sqrt(2.0));
+  if (x < 1e-6) return alpha * 4.0 / kPi;
+  const double p = std::erf(x);
+  return alpha * (p * p * 2.0 * kPi * sigma * sigma) / (kPi * r * r);
+}
+
+double sub_tan(int cones, double tan_theta) {
+  return cones == 1 ? tan_theta : (cones == 3 ? tan_theta * kRadius3 : tan_theta * kRadius7);
+}
+
+void frame(const Vec3d& w, Vec3d& u, Vec3d& v) {
+  const Vec3d helper = std::fabs(w.x) < 0.6 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+  u = normalize(cross(helper, w));
+  v = cross(w, u);
+}
+
+}  // namespace
+
+ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& options)
+    : m_pyramid(&pyramid), m_options(options) {
+  require(pyramid.levels() >= 1, "ConeTracer: the extinction pyramid is empty");
+  const ConeOptions& o = options;
+  require(std::isfinite(o.aperture_deg) && o.aperture_deg > 0 && o.aperture_deg <= 89,
+          "ConeTracer: aperture_deg = " + std::to_string(o.aperture_deg) + "; expected in (0, 89]");
+  require(o.splits == 1 || o.splits == 3 || o.splits == 7,
+          "ConeTracer: splits = " + std::to_string(o.splits) + "; expected 1, 3 or 7");
+  require(std::isfinite(o.length) && o.length >= 0, "ConeTracer: length = " + std::to_string(o.length) + "; expected >= 0");
+  require(std::isfinite(o.fraction_of_diagonal) && o.fraction_of_diagonal > 0,
+          "ConeTracer: fraction_of_diagonal = " + std::to_string(o.fraction_of_diagonal) + "; expected > 0");
+  require(std::isfinite(o.gap), "ConeTracer: gap is not finite");
+  require(std::isfinite(o.attenuation) && o.attenuation > 0,
+          "ConeTracer: attenuation = " + std::to_string(o.attenuation) + "; expected > 0");
+
+  const double sigma0 = pyramid.sigma0();
+  m_length = o.length > 0 ? o.length : o.fraction_of_diagonal * pyramid.bounds().diagonal();
+  m_gap = o.gap >= 0 ? o.gap : 3.0 * sigma0;
+  const double tan_theta = std::tan(o.aperture_deg * kPi / 180.0);
+
+  for (int k = 0; k < 3; ++k) {
+    const double phi = (30.0 + 120.0 * k) * kPi / 180.0;
+    m_dir3[static_cast<std::size_t>(k)] = normalize(Vec3d{tan_theta * kOffset3 * std::cos(phi), tan_theta * kOffset3 * std::sin(phi), 1.0});
+  }
+  m_dir7[0] = {0, 0, 1};
+  for (int j = 0; j < 6; ++j) {
+    const double phi = 60.0 * j * kPi / 180.0;
+    m_dir7[static_cast<std::size_t>(j + 1)] = normalize(Vec3d{tan_theta * kOffset7 * std::cos(phi), tan_theta * kOffset7 * std::sin(phi), 1.0});
+  }
+
+  // Schedule: at each distance, split first (keeps level 0 as long as possible), then climb levels,
+  // until the section radius is within r_c = 2 sigma. Steps are 1.25 sigma_i + 1.25 sigma_{i+1}.
+  if (!(m_length > m_gap)) return;
+  const int top = pyramid.levels() - 1;
+  int level = 0, cones = 1;
+  // Fits (cones, level) for a sample at distance d; returns false if the level had to change.
+  auto fit = [&](double d, int& c, int& l) {
+    const int l_in = l;
+    while (d * sub_tan(c, tan_theta) > 2.0 * pyramid.level(l).sigma) {
+      if (c < o.splits) {
+        c = c == 1 ? 3 : 7;
+      } else if (l < top) {
+        ++l;
+      } else {
+        break;
+      }
+    }
+    return l == l_in;
+  };
+  double d = m_gap;
+  fit(d, cones, level);
+  double prev_d = d;
+  for (bool first = true;; first = false) {
+    const double r = d * sub_tan(cones, tan_theta);
+    const double sigma = pyramid.level(level).sigma;
+    m_schedule.push_back({d, first ? 0.0 : 0.5 * (d - prev_d), section_weight(o.weight, r, sigma, o.attenuation), level, cones});
+    if (d >= m_length) break;
+    prev_d = d;
+    // Next distance: 2.5 sigma at the same level; if that sample needs a higher level, the step
+    // is 1.25 sigma + 1.25 sigma_next (re-fitted at the new distance).
+    int next_cones = cones, next_level = level;
+    double next_d = d + 2.5 * sigma;
+    for (int guard = 0; guard < 64 && next_d < m_length && !fit(next_d, next_cones, next_level); ++guard) {
+      const int l = next_level;
+      next_d = d + 1.25 * sigma + 1.25 * pyramid.level(l).sigma;
+    }
+    if (next_d >= m_length) {
+      // Last sample exactly at L (trapezoid over [h0, L]), fitted to its own section.
+      next_d = m_length;
+      next_cones = cones;
+      next_level = level;
+      fit(next_d, next_cones, next_level);
+    }
+    d = next_d;
+    cones = next_cones;
+    level = next_level;
+  }
+}
+
+double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis) const {
+  return transmittance(apex, axis, m_length);
+}
+
+double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis, double max_length) const {
+  const double len = penumbra::length(axis);
+  if (!(len > 0) || !std::isfinite(len) || m_schedule.empty() || !(max_length > m_gap)) return 1.0;
+  const Vec3d w = axis / len;
+  Vec3d u, v;
+  frame(w, u, v);
+  auto world = [&](const Vec3d& c) { return u * c.x + v * c.y + w * c.z; };
+  Vec3d dirs[7];
+  double depth[7] = {0, 0, 0, 0, 0, 0, 0}, amp[7] = {0, 0, 0, 0, 0, 0, 0};
+  int cones = 1;
+  dirs[0] = w;
+  for (std::size_t s = 0; s < m_schedule.size(); ++s) {
+    ConeSample cs = m_schedule[s];
+    bool last = false;
+    if (cs.distance >= max_length) {
+      // Stop at the target (a point light): one shortened trapezoid to max_length.
+      const double prev = s > 0 ? m_schedule[s - 1].distance : cs.distance;
+      cs.weight = s > 0 ? 0.5 * (max_length - prev) : 0.0;
+      cs.distance = max_length;
+      last = true;
+    }
+    if (cs.cones != cones) {
+      if (cs.cones == 3 && cones == 1) {
+        // 1 -> 3: every sub-cone inherits the parent (Algorithm 3, lines 2-4).
+        for (int i = 1; i < 3; ++i) depth[i] = depth[0], amp[i] = amp[0];
+      } else {
+        if (cones == 1)
+          for (int i = 1; i < 3; ++i) depth[i] = depth[0], amp[i] = amp[0];
+        // 3 -> 7: centre takes the mean of the three, border cones 2k+1, 2k+2 the closest
+        // 3-cone k (Algorithm 4, lines 2-11).
+        const double d3[3] = {depth[0], depth[1], depth[2]}, a3[3] = {amp[0], amp[1], amp[2]};
+        depth[0] = (d3[0] + d3[1] + d3[2]) / 3.0;
+        amp[0] = (a3[0] + a3[1] + a3[2]) / 3.0;
+        for (int k = 0; k < 3; ++k)
+          for (int j = 0; j < 2; ++j) depth[1 + 2 * k + j] = d3[k], amp[1 + 2 * k + j] = a3[k];
+      }
+      cones = cs.cones;
+      for (int i = 0; i < cones; ++i)
+        dirs[i] = world(cones == 3 ? m_dir3[static_cast<std::size_t>(i)] : m_dir7[static_cast<std::size_t>(i)]);
+    }
+    const PyramidLevel& lev = m_pyramid->level(cs.level);
+    bool all_opaque = true;
+    for (int i = 0; i < cones; ++i) {
+      const double a = cs.kappa * lev.sample(apex + dirs[i] * cs.distance);
+      depth[i] += cs.weight * (amp[i] + a);
+      amp[i] = a;
+      all_opaque = all_opaque && depth[i] > kOpaqueDepth;
+    }
+    if (last || all_opaque) break;
+  }
+  // Cosine-weighted mean over the final cones (thesis Algorithm 4, line 27).
+  double sum = 0, wsum = 0;
+  for (int i = 0; i < cones; ++i) {
+    const double c = cones == 1 ? 1.0 : dot(dirs[i], w);
+    sum += c * std::exp(-depth[i]);
+    wsum += c;
+  }
+  return sum / wsum;
+}
+
+}  // namespace penumbra::render

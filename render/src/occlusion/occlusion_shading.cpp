@@ -1,0 +1,29 @@
+// render/src/occlusion/occlusion_shading.cpp -- cones towards the eye and towards lights
+#include <cmath>
+
+#include "penumbra/render/occlusion.h"
+
+namespace penumbra::render {
+
+double directional_occlusion(const ConeTracer& tracer, const Vec3d& x, const Vec3d& eye) {
+  // Cones point at the viewer (thesis sec. 3.3.1): what is in front of the sample darkens it.
+  return tracer.transmittance(x, eye - x);
+}
+
+double shadow_transmittance(const ConeTracer& tracer, const ShadowLight& light, const Vec3d& x) {
+  constexpr double kPi = 3.14159265358979323846;
+  if (light.kind == ShadowLight::Kind::directional) return tracer.transmittance(x, -light.vector);
+  const Vec3d to_light = light.vector - x;
+  const double dist = length(to_light);
+  if (!(dist > 0)) return 1.0;
+  if (light.kind == ShadowLight::Kind::spot) {
+    const double sl = length(light.spot_direction);
+    if (!(sl > 0)) return 0.0;
+    const double c = dot(-to_light, light.spot_direction) / (dist * sl);
+    if (c < std::cos(light.spot_angle_deg * kPi / 180.0)) return 0.0;
+  }
+  // Nothing beyond the light occludes it: the cone stops there.
+  return tracer.transmittance(x, to_light, dist);
+}
+
+}  // namespace penumbra::render
