@@ -253,8 +253,89 @@ void parse_trigger(const json& j, const std::string& path, Config& c) {
   if (c.trigger.every_cycles == 0 && c.trigger.every_time == 0) fail(path, "needs every_cycles and/or every_time");
 }
 
+render::Light parse_light(const json& j, const std::string& path) {
+  only_keys(j, path, {"type", "direction", "position", "color"});
+  render::Light l;
+  const json* t = find(j, "type");
+  if (!t) fail(child(path, "type"), "is required (\"directional\" or \"point\")");
+  const bool directional = choice(*t, child(path, "type"), {"directional", "point"}) == "directional";
+  l.kind = directional ? render::Light::Kind::directional : render::Light::Kind::point;
+  const char* key = directional ? "direction" : "position";
+  const char* other = directional ? "position" : "direction";
+  if (find(j, other)) fail(child(path, other), std::string("does not apply to a ") + (directional ? "directional" : "point") + " light");
+  const json* v = find(j, key);
+  if (!v) fail(child(path, key), "is required");
+  l.vector = vec3(*v, child(path, key));
+  if (directional && length(l.vector) == 0) fail(child(path, key), "must not be the zero vector");
+  if (const json* c = find(j, "color")) {
+    const auto rgb = tuple(*c, child(path, "color"), 3, "[r,g,b] with components >= 0");
+    for (int k = 0; k < 3; ++k) {
+      if (rgb[k] < 0) fail(child(path, "color"), "must be [r,g,b] with components >= 0");
+      l.color[static_cast<std::size_t>(k)] = rgb[k];
+    }
+  }
+  return l;
+}
+
+double non_negative(const json& j, const std::string& path) {
+  const double v = number(j, path);
+  if (v < 0) fail(path, "must be >= 0");
+  return v;
+}
+
+LightingConfig parse_lighting(const json& j, const std::string& path) {
+  only_keys(j, path, {"model", "lights", "absorption", "scattering", "level0_resolution", "phong", "budget"});
+  LightingConfig l;
+  if (const json* m = find(j, "model")) {
+    const std::string s = choice(*m, child(path, "model"), {"none", "phong", "light-volume"});
+    l.model = s == "none" ? render::LightingModel::none
+                          : (s == "phong" ? render::LightingModel::phong : render::LightingModel::light_volume);
+  }
+  if (const json* ls = find(j, "lights")) {
+    const std::string lp = child(path, "lights");
+    if (!ls->is_array()) fail(lp, "must be an array of lights");
+    for (std::size_t i = 0; i < ls->size(); ++i) l.lights.push_back(parse_light((*ls)[i], item(lp, i)));
+  }
+  if (l.model == render::LightingModel::light_volume && l.lights.empty())
+    fail(child(path, "lights"), "needs at least one light for model \"light-volume\"");
+  if (const json* a = find(j, "absorption")) l.absorption = non_negative(*a, child(path, "absorption"));
+  if (const json* sc = find(j, "scattering")) {
+    const std::string sp = child(path, "scattering");
+    if (sc->is_number()) {
+      l.scattering.fill(non_negative(*sc, sp));
+    } else {
+      const auto v = tuple(*sc, sp, 3, "a number or [r,g,b], each >= 0");
+      for (int k = 0; k < 3; ++k) {
+        if (v[k] < 0) fail(sp, "must be a number or [r,g,b], each >= 0");
+        l.scattering[static_cast<std::size_t>(k)] = v[k];
+      }
+    }
+  }
+  if (const json* r = find(j, "level0_resolution"))
+    l.level0_resolution = static_cast<int>(integer(*r, child(path, "level0_resolution"), 4, 1024));
+  if (const json* ph = find(j, "phong")) {
+    const std::string pp = child(path, "phong");
+    only_keys(*ph, pp, {"ambient", "diffuse", "specular", "shininess"});
+    if (const json* v = find(*ph, "ambient")) l.ambient = non_negative(*v, child(pp, "ambient"));
+    if (const json* v = find(*ph, "diffuse")) l.diffuse = non_negative(*v, child(pp, "diffuse"));
+    if (const json* v = find(*ph, "specular")) l.specular = non_negative(*v, child(pp, "specular"));
+    if (const json* v = find(*ph, "shininess")) l.shininess = non_negative(*v, child(pp, "shininess"));
+  }
+  if (const json* b = find(j, "budget")) {
+    const std::string bp = child(path, "budget");
+    only_keys(*b, bp, {"iterations", "ms"});
+    if (const json* n = find(*b, "iterations"))
+      l.budget.max_work_units = static_cast<int>(integer(*n, child(bp, "iterations"), 1, 1 << 30));
+    if (const json* ms = find(*b, "ms")) {
+      l.budget.max_ms = number(*ms, child(bp, "ms"));
+      if (l.budget.max_ms <= 0) fail(child(bp, "ms"), "must be > 0");
+    }
+  }
+  return l;
+}
+
 Config parse_document(const json& j) {
-  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend"});
+  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -280,6 +361,7 @@ Config parse_document(const json& j) {
     c.backend = s == "cpu" ? Backend::cpu : (s == "gpu" ? Backend::gpu : Backend::automatic);
     c.cpu_fallback = c.backend == Backend::automatic;
   }
+  if (const json* l = find(j, "lighting")) c.lighting = parse_lighting(*l, "lighting");
   return c;
 }
 

@@ -1,5 +1,6 @@
 // insitu/src/config.h -- the runtime's JSON configuration, parsed and checked
 #pragma once
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -7,6 +8,8 @@
 
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/vec3.h"
+#include "penumbra/render/light_volume.h"
+#include "penumbra/render/shading.h"
 #include "penumbra/render/transfer_function.h"
 
 namespace penumbra::insitu {
@@ -56,6 +59,20 @@ struct TriggerConfig {
   double every_time = 0.0;        ///< 0 = not used
 };
 
+/// How rendered samples are lit (insitu/README.md, "lighting").
+struct LightingConfig {
+  render::LightingModel model = render::LightingModel::none;
+  /// Light sources: the light volume's, and the first directional one is Phong's key light
+  /// (none: a headlight).
+  std::vector<render::Light> lights;
+  double absorption = 1.0;                    ///< sigma_a~ of the light volume
+  std::array<double, 3> scattering{0, 0, 0};  ///< sigma_s~ per channel
+  int level0_resolution = 128;
+  double ambient = 0.35, diffuse = 0.55, specular = 0.25, shininess = 24.0;
+  /// Light-volume work per rendered step (the light converges over steps when it runs out).
+  render::LightBudget budget;
+};
+
 /// The whole configuration. See insitu/README.md for the JSON schema.
 struct Config {
   std::string output_directory;
@@ -68,6 +85,8 @@ struct Config {
   std::vector<FieldConfig> fields;
   TriggerConfig trigger;
   Backend backend = Backend::cpu;
+  /// Present when the config has a "lighting" object: the database then gets a lighting column.
+  std::optional<LightingConfig> lighting;
   /// Set for "auto": a mesh the GPU cannot hold (device memory) is rendered on the CPU instead.
   bool cpu_fallback = false;
 

@@ -16,6 +16,7 @@
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
+#include "penumbra/render/light_volume.h"
 #include "penumbra/render/tet_mesh.h"
 
 namespace penumbra::insitu {
@@ -27,8 +28,42 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 constexpr double kPi = 3.14159265358979323846;
 
 std::vector<std::string> database_parameters(const Config& c) {
-  if (c.look_at.empty()) return {"time", "phi", "theta", "field"};
-  return {"time", "phi", "theta", "camera", "field"};
+  std::vector<std::string> p{"time", "phi", "theta"};
+  if (!c.look_at.empty()) p.push_back("camera");
+  p.push_back("field");
+  if (c.lighting) p.push_back("lighting");
+  return p;
+}
+
+/// The `lighting` column's value.
+std::string lighting_label(render::LightingModel m) {
+  switch (m) {
+    case render::LightingModel::none: return "none";
+    case render::LightingModel::phong: return "phong";
+    case render::LightingModel::light_volume: return "light-volume";
+  }
+  return "none";
+}
+
+bool lit(const Config& c) { return c.lighting && c.lighting->model != render::LightingModel::none; }
+
+/// Shading of a frame; `light_rgb` is the light volume's field for model light-volume.
+render::Shading shading_of(const LightingConfig& l, const std::vector<float>* light_rgb) {
+  render::Shading s;
+  s.model = l.model;
+  s.light_rgb = light_rgb;
+  s.ambient = l.ambient;
+  s.diffuse = l.diffuse;
+  s.specular = l.specular;
+  s.shininess = l.shininess;
+  // The key light for the diffuse and specular terms: the first directional light, seen from
+  // the lit side (towards the light); a headlight when there is none.
+  for (const render::Light& light : l.lights)
+    if (light.kind == render::Light::Kind::directional) {
+      s.light_direction = -normalize(light.vector);
+      break;
+    }
+  return s;
 }
 
 /// The `field` column per config entry: the field name, made unique with the component when
@@ -150,12 +185,26 @@ struct Context::PreparedMesh {
   std::vector<std::uint8_t> cell_types;
   MeshView view;  ///< over the owned copies (points from the prepared mesh)
   std::vector<CameraEntry> cameras;
+  /// Per config field entry, its light volume (model light-volume), made at the first step and
+  /// kept across steps so that each step's light starts from the previous one.
+  std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
 };
 
 Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   if (m_config.backend == Backend::automatic) m_config.cpu_fallback = true;
+  if (lit(m_config)) {
+    // Shading runs in the CPU ray caster only so far.
+    if (m_config.backend == Backend::gpu)
+      throw Error(ErrorCode::backend_unavailable,
+                  "config: lighting model \"" + lighting_label(m_config.lighting->model) +
+                      "\" is rendered by the CPU backend only; use backend \"cpu\" or \"auto\", or lighting model \"none\"");
+    if (m_config.backend == Backend::automatic) {
+      log_line("backend \"auto\": lighting is rendered on the CPU");
+      m_config.backend = Backend::cpu;
+    }
+  }
   m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);
@@ -285,13 +334,37 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
   // A held view stays valid: borrowed views are dropped after every execute, copied ones own their data.
   const std::vector<float> scalars = point_scalars(m_mesh->view, it->second.view, f.mode, f.component);
   const render::TransferFunction tf = resolve_transfer_function(f, scalars, m_mesh->tets->bounds.diagonal());
+  render::RenderOptions options;
+  if (lit(m_config)) {
+    const LightingConfig& l = *m_config.lighting;
+    const std::vector<float>* light_rgb = nullptr;
+    if (l.model == render::LightingModel::light_volume) {
+      auto& volumes = m_mesh->light_volumes;
+      if (volumes.size() < m_config.fields.size()) volumes.resize(m_config.fields.size());
+      auto& lv = volumes[index];
+      if (!lv) {
+        render::LightVolumeOptions lo;
+        lo.level0_resolution = l.level0_resolution;
+        lo.sigma_a = l.absorption;
+        lo.sigma_s = l.scattering;
+        lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
+        lv->set_lights(l.lights);
+      }
+      const auto t0 = Clock::now();
+      lv->set_field(scalars, tf);
+      m_last_step.light = lv->update(l.budget);
+      m_last_step.light_ms += ms_since(t0);
+      light_rgb = &lv->light_rgb();
+    }
+    options.shading = shading_of(l, light_rgb);
+  }
   const bool with_camera_column = !m_config.look_at.empty();
   char cycle_text[32];
   std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
   for (const CameraEntry& cam : m_mesh->cameras) {
     const auto t0 = Clock::now();
     const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera)
-                                                   : m_mesh->caster->render(scalars, tf, cam.camera);
+                                                   : m_mesh->caster->render(scalars, tf, cam.camera, options);
     render_ms += ms_since(t0);
     const std::string rel = m_database->new_image_path(m_field_labels[index], cycle_text + cam.stem);
     render::write_png(m_database->path_of(rel), render::to_rgb8(image, m_config.background), image.width, image.height);
@@ -299,6 +372,7 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
     row.values = {format_number(time), cam.phi, cam.theta};
     if (with_camera_column) row.values.push_back(cam.name);
     row.values.push_back(m_field_labels[index]);
+    if (m_config.lighting) row.values.push_back(lighting_label(m_config.lighting->model));
     row.file = rel;
     rows.push_back(std::move(row));
   }
@@ -317,6 +391,8 @@ bool Context::execute(double time, std::int64_t cycle) {
   const auto t0 = Clock::now();
   std::vector<CinemaDatabase::Row> rows;
   double render_ms = 0;
+  m_last_step.light = {};
+  m_last_step.light_ms = 0;
   std::string failures;
   ErrorCode first_code = ErrorCode::ok;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
@@ -330,7 +406,10 @@ bool Context::execute(double time, std::int64_t cycle) {
   }
   // Only images that were completely written are listed.
   if (!rows.empty()) m_database->commit(rows);
-  m_last_step = {cycle, static_cast<int>(rows.size()), render_ms, ms_since(t0)};
+  m_last_step.cycle = cycle;
+  m_last_step.images = static_cast<int>(rows.size());
+  m_last_step.render_ms = render_ms;
+  m_last_step.total_ms = ms_since(t0);
   if (first_code != ErrorCode::ok) throw Error(first_code, failures);
   return true;
 }

@@ -10,6 +10,7 @@
 #include "config.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/mesh_view.h"
+#include "penumbra/render/light_volume.h"
 #include "trigger.h"
 
 namespace penumbra::render {
@@ -25,6 +26,10 @@ struct StepStats {
   int images = 0;
   double render_ms = 0;  ///< ray casting only
   double total_ms = 0;   ///< field conversion, rendering, PNG encoding and database commit
+  /// Light volume (lighting model light-volume): time spent and the last field's solve report,
+  /// whose residual tells how far the light is from converged.
+  double light_ms = 0;
+  render::LightUpdateReport light;
 };
 
 /// One solver's in-situ pipeline: holds the prepared mesh, the fields published since the last

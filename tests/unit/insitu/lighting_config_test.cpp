@@ -1,0 +1,142 @@
+// tests/unit/insitu/lighting_config_test.cpp -- the "lighting" config object, and lit steps
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cinema_database.h"
+#include "config.h"
+#include "context.h"
+#include "fixtures/meshes.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/image.h"
+#include "test_util.h"
+
+namespace penumbra::insitu {
+namespace {
+
+using fixtures::BlockCells;
+using testing::TempDir;
+
+std::string with_lighting(const std::string& dir, const std::string& lighting, const std::string& extra = "") {
+  return testing::small_config(dir, R"([{"name": "T"}])", R"(, "lighting": )" + lighting + extra);
+}
+
+void expect_config_error(const std::string& lighting, const std::string& needle) {
+  try {
+    parse_config(with_lighting("/tmp/unused", lighting));
+    ADD_FAILURE() << "expected an error containing: " << needle;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+TEST(LightingConfig, IsReadWithDefaults) {
+  const Config plain = parse_config(testing::small_config("/tmp/unused"));
+  EXPECT_FALSE(plain.lighting.has_value());
+  const Config c = parse_config(with_lighting("/tmp/unused", R"({"model": "light-volume",
+      "lights": [{"type": "directional", "direction": [0, 0, -2], "color": [1, 0.9, 0.8]},
+                 {"type": "point", "position": [0.5, 0.5, 3]}],
+      "absorption": 2.5, "scattering": [0.1, 0.2, 0.3], "level0_resolution": 32,
+      "phong": {"ambient": 0.2, "specular": 0}, "budget": {"iterations": 12, "ms": 40}})"));
+  ASSERT_TRUE(c.lighting.has_value());
+  const LightingConfig& l = *c.lighting;
+  EXPECT_EQ(l.model, render::LightingModel::light_volume);
+  ASSERT_EQ(l.lights.size(), 2u);
+  EXPECT_EQ(l.lights[0].kind, render::Light::Kind::directional);
+  EXPECT_EQ(l.lights[0].vector.z, -2);
+  EXPECT_EQ(l.lights[0].color[2], 0.8);
+  EXPECT_EQ(l.lights[1].kind, render::Light::Kind::point);
+  EXPECT_EQ(l.lights[1].color[0], 1.0);  // default white
+  EXPECT_EQ(l.absorption, 2.5);
+  EXPECT_EQ(l.scattering[1], 0.2);
+  EXPECT_EQ(l.level0_resolution, 32);
+  EXPECT_EQ(l.ambient, 0.2);
+  EXPECT_EQ(l.diffuse, 0.55);  // default kept
+  EXPECT_EQ(l.specular, 0.0);
+  EXPECT_EQ(l.budget.max_work_units, 12);
+  EXPECT_EQ(l.budget.max_ms, 40);
+  const Config scalar = parse_config(with_lighting("/tmp/unused", R"({"model": "phong", "scattering": 0.5})"));
+  EXPECT_EQ(scalar.lighting->scattering[2], 0.5);
+  EXPECT_EQ(scalar.lighting->model, render::LightingModel::phong);
+}
+
+TEST(LightingConfig, EveryErrorNamesItsKeyPath) {
+  expect_config_error(R"({"model": "raytraced"})", "lighting.model must be one of");
+  expect_config_error(R"({"model": "light-volume"})", "lighting.lights needs at least one light");
+  expect_config_error(R"({"lights": [{"direction": [0, 0, 1]}]})", "lighting.lights[0].type is required");
+  expect_config_error(R"({"lights": [{"type": "spot", "direction": [0, 0, 1]}]})", "lighting.lights[0].type must be one of");
+  expect_config_error(R"({"lights": [{"type": "directional"}]})", "lighting.lights[0].direction is required");
+  expect_config_error(R"({"lights": [{"type": "directional", "direction": [0, 0, 0]}]})",
+                      "lighting.lights[0].direction must not be the zero vector");
+  expect_config_error(R"({"lights": [{"type": "point", "position": [0, 0, 1], "direction": [0, 0, 1]}]})",
+                      "lighting.lights[0].direction does not apply to a point light");
+  expect_config_error(R"({"lights": [{"type": "point", "position": [0, 0, 1], "color": [1, -1, 1]}]})",
+                      "lighting.lights[0].color must be [r,g,b] with components >= 0");
+  expect_config_error(R"({"absorption": -1})", "lighting.absorption must be >= 0");
+  expect_config_error(R"({"scattering": [1, 2]})", "lighting.scattering must be a number or [r,g,b]");
+  expect_config_error(R"({"level0_resolution": 2})", "lighting.level0_resolution must be in [4, 1024]");
+  expect_config_error(R"({"phong": {"gloss": 1}})", "lighting.phong.gloss is not a known key");
+  expect_config_error(R"({"budget": {"ms": 0}})", "lighting.budget.ms must be > 0");
+  expect_config_error(R"({"shadows": true})", "lighting.shadows is not a known key");
+}
+
+struct LitScene {
+  fixtures::OwnedMesh mesh = fixtures::block(BlockCells::tets, 5, 5, 5, {0, 0, 0}, {1, 1, 1});
+  std::vector<double> field = fixtures::sample(mesh, [](double x, double, double) { return x; });
+};
+
+// Mean brightness of the image behind the first data row of `dir`'s database.
+double mean_brightness(const std::string& dir, const std::vector<std::string>& row) {
+  int w = 0, h = 0;
+  const auto rgb = render::read_png_rgb(dir + "/" + row.back(), w, h);
+  double sum = 0;
+  for (unsigned char v : rgb) sum += v;
+  return sum / static_cast<double>(rgb.size());
+}
+
+std::vector<std::vector<std::string>> run_step(const std::string& dir, const std::string& lighting) {
+  LitScene s;
+  // Black background, so that only the light shows.
+  Context ctx(parse_config(R"({"output": {"directory": ")" + dir + R"("},
+      "image": {"width": 24, "height": 20, "background": [0, 0, 0]},
+      "cameras": {"phi": [-90], "theta": [20]}, "fields": [{"name": "T"}], "lighting": )" + lighting + "}"));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_field(fixtures::point_field("T", s.field), false);
+  EXPECT_TRUE(ctx.execute(0.0, 1));
+  return CinemaDatabase::parse_csv(testing::read_text(dir + "/data.csv"), "data.csv");
+}
+
+TEST(LightingConfig, LitStepsWriteALightingColumnAndShadowedImages) {
+  TempDir tmp;
+  const auto plain = run_step(tmp / "plain", R"({"model": "none"})");
+  const auto lit = run_step(tmp / "lit", R"({"model": "light-volume", "absorption": 4,
+      "lights": [{"type": "directional", "direction": [1, 0, 0]}], "phong": {"ambient": 1, "diffuse": 0, "specular": 0},
+      "level0_resolution": 16})");
+  ASSERT_EQ(plain.size(), 2u);
+  ASSERT_EQ(lit.size(), 2u);
+  EXPECT_EQ(plain[0], (std::vector<std::string>{"time", "phi", "theta", "field", "lighting", "FILE"}));
+  EXPECT_EQ(plain[1][4], "none");
+  EXPECT_EQ(lit[1][4], "light-volume");
+  // Light entering at x = 0 through an absorbing block: everything behind the front is dimmer,
+  // so the lit image is darker than the unlit one, but not black.
+  const double b_plain = mean_brightness(tmp / "plain", plain[1]), b_lit = mean_brightness(tmp / "lit", lit[1]);
+  EXPECT_LT(b_lit, 0.9 * b_plain);
+  EXPECT_GT(b_lit, 0.05 * b_plain);
+}
+
+TEST(LightingConfig, GpuBackendRefusesLightingAndAutoRendersItOnTheCpu) {
+  TempDir tmp;
+  try {
+    Context ctx(parse_config(with_lighting(tmp / "gpu", R"({"model": "phong"})", R"(, "backend": "gpu")")));
+    ADD_FAILURE() << "expected backend_unavailable";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::backend_unavailable);
+    EXPECT_NE(std::string(e.what()).find("CPU backend only"), std::string::npos) << e.what();
+  }
+  Context ctx(parse_config(with_lighting(tmp / "auto", R"({"model": "phong"})", R"(, "backend": "auto")")));
+  EXPECT_EQ(ctx.config().backend, Backend::cpu);
+}
+
+}  // namespace
+}  // namespace penumbra::insitu
