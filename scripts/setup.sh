@@ -9,7 +9,7 @@ packages=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri mesa-utils
   libpng-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libzfp-dev libzstd-dev
+  libzfp-dev libzstd-dev libfpzip-dev
   gmsh  # benchmark meshes (bench/run.sh)
 )
 missing=()

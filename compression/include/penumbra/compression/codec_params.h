@@ -1,0 +1,52 @@
+// compression/include/penumbra/compression/codec_params.h
+#pragma once
+#include <cstdint>
+
+namespace penumbra::compression {
+
+/// How a maximum error is stated. `range_relative` multiplies the value range of the data
+/// seen so far (a streaming encoder does not know the final range), so the bound actually
+/// held is never looser than value × final range.
+enum class BoundKind : std::uint32_t { none = 0, absolute = 1, range_relative = 2 };
+
+struct ErrorBound {
+  BoundKind kind = BoundKind::none;
+  double value = 0.0;
+};
+
+/// Parameters of the time-window vector-quantisation codec (Bernardon et al., sec. 3).
+struct CodecParams {
+  /// Time steps per window (= per page). A multiple of 8 in [8, 1024]: D8 holds the means
+  /// of 8 equal sub-blocks, D_W the per-step detail.
+  std::uint32_t window = 64;
+  /// Entries of each codebook, 2..256 (indices are stored as one byte).
+  std::uint32_t codebook_size = 256;
+  /// Vertices sampled (stratified) to train the codebooks; training cost does not grow
+  /// with the mesh beyond this. All vertices are still encoded against the codebooks.
+  std::uint32_t training_sample = 8192;
+  /// Lloyd iterations after each codebook split (cold start) and from the previous
+  /// window's codebooks (warm start).
+  std::uint32_t cold_iterations = 8;
+  std::uint32_t warm_iterations = 6;
+  /// D8 candidates tried per vertex: each is completed by its best D_W entry and the pair
+  /// with the least error is kept (1: plain two-stage search; more: better on jumps, slower).
+  std::uint32_t search_candidates = 2;
+  /// Seed of the sampling and split perturbations; equal seeds give equal files.
+  std::uint64_t seed = 1;
+  /// Optional guaranteed maximum error at every value.
+  ErrorBound bound;
+  /// Without a bound: a window whose VQ signal-to-noise ratio (on the training sample) is
+  /// below this is stored with the predictive coder at a bound equal to VQ's RMS error.
+  double min_vq_snr_db = 12.0;
+};
+
+/// How one page is stored; recorded in its header.
+enum class PageMethod : std::uint32_t {
+  vq = 0,           ///< mean + D8 + D_W codebooks, 4 bytes per vertex
+  vq_residual = 1,  ///< vq plus a quantised residual that holds the error bound
+  predictive = 2,   ///< error-bounded temporal predictive coder (VQ-poor fields)
+};
+
+const char* to_string(PageMethod method);
+
+}  // namespace penumbra::compression

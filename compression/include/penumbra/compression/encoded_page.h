@@ -1,0 +1,65 @@
+// compression/include/penumbra/compression/encoded_page.h
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "penumbra/compression/codec_params.h"
+
+namespace penumbra::compression {
+
+/// Small bit-packed blocks of per-vertex integers, one block per vertex-window, so that any
+/// vertex stays randomly accessible: vertices are grouped by kGroupSize; each group's bits
+/// start at a byte offset, and a 4-bit width per vertex says how many bits each of its values
+/// takes (width kRawWidth: the vertex's values are stored as exact float32 instead).
+struct BitBlocks {
+  static constexpr std::uint32_t kGroupSize = 128;
+  static constexpr std::uint32_t kRawWidth = 15;
+  std::vector<std::uint64_t> group_offsets;  ///< byte offset of each group, plus the end
+  std::vector<std::uint8_t> widths;          ///< two 4-bit widths per byte, low nibble first
+  std::vector<std::uint8_t> payload;         ///< bits, LSB first; 8 bytes of padding at the end
+
+  std::uint32_t width(std::uint64_t vertex) const {
+    return (widths[vertex >> 1] >> ((vertex & 1) * 4)) & 0xF;
+  }
+  bool empty() const { return group_offsets.empty(); }
+};
+
+/// One window of one field, decoded from (or about to be written as) one page.
+/// Reconstruction of step t (0 <= t < step_count) at vertex v, in float, in this order:
+///   vq:           ((mean(v) + c8[i8[v]][t / (window/8)]) + cw[iw[v]][t])
+///   vq_residual:  vq + float(q) * step, or the stored exact value for raw vertices
+///   predictive:   lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
+/// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale.
+struct EncodedPage {
+  PageMethod method = PageMethod::vq;
+  std::uint64_t first_step = 0;
+  std::uint32_t step_count = 0;
+  std::uint32_t window = 0;
+  std::uint32_t codebook_size = 0;
+  std::uint64_t vertex_count = 0;
+  std::vector<double> times;  ///< time value of each of the step_count steps
+  float value_min = 0, value_max = 0;
+  /// Error bound this page holds at every value (0: none).
+  float bound = 0;
+  /// Why `method` was chosen (recorded in the page header): VQ's signal-to-noise ratio on
+  /// the training sample, and the estimated bytes of VQ (+ residual) and of the predictive coder.
+  float sample_snr_db = 0, vq_bytes_estimate = 0, predictive_bytes_estimate = 0;
+
+  // vq / vq_residual
+  float mean_lo = 0, mean_scale = 0;
+  std::vector<float> c8;  ///< codebook_size x 8
+  std::vector<float> cw;  ///< codebook_size x window
+  std::vector<std::uint16_t> mean_q;
+  std::vector<std::uint8_t> i8, iw;
+
+  // vq_residual (quantised residual, zigzag) and predictive (zigzag deltas)
+  float step = 0;
+  float lo = 0;                ///< predictive: value of k = 0
+  std::uint32_t first_width = 0;  ///< predictive: bits of k_0
+  BitBlocks blocks;
+
+  /// Bytes this page holds in memory (what a pager counts against its cap).
+  std::uint64_t resident_bytes() const;
+};
+
+}  // namespace penumbra::compression

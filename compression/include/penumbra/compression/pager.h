@@ -1,0 +1,65 @@
+// compression/include/penumbra/compression/pager.h
+#pragma once
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "penumbra/compression/field_file.h"
+
+namespace penumbra::compression {
+
+struct PagerOptions {
+  /// Most bytes of loaded pages held at once (0: no cap). Must fit the largest page; the
+  /// next page is prefetched only while current + next fit.
+  std::uint64_t memory_cap_bytes = 0;
+  /// Load the next page on a background thread when playback enters a page (Bernardon et
+  /// al., sec. 5.3: current and next codebooks resident, so playback does not wait).
+  bool prefetch = true;
+};
+
+struct PagerStats {
+  std::uint64_t reads = 0;          ///< read_step calls
+  std::uint64_t stalls = 0;         ///< reads that waited for a page to come from disk
+  double stall_seconds = 0;         ///< time spent in those waits
+  std::uint64_t loads = 0;          ///< pages loaded (either thread)
+  std::uint64_t prefetched = 0;     ///< pages loaded ahead by the background thread
+  std::uint64_t resident_bytes = 0, peak_resident_bytes = 0;
+};
+
+/// Plays a compressed field back step by step, keeping the current and the next page
+/// resident. Random access works (a page not resident is loaded, counted as a stall).
+/// Output is bit-identical to CompressedField::read_step. One reader at a time.
+class Pager {
+public:
+  explicit Pager(std::shared_ptr<const CompressedField> field, PagerOptions options = {});
+  ~Pager();
+  Pager(const Pager&) = delete;
+  Pager& operator=(const Pager&) = delete;
+
+  /// Decodes global step `step` for all vertices into out[vertex_count].
+  void read_step(std::uint64_t step, float* out);
+  PagerStats stats() const;
+  const CompressedField& field() const { return *m_field; }
+
+private:
+  void prefetch_loop();
+  void request_prefetch_locked(std::size_t page);
+  void evict_locked(std::size_t keep_a, std::size_t keep_b);
+  void insert_locked(std::size_t page, std::shared_ptr<const EncodedPage> data);
+
+  std::shared_ptr<const CompressedField> m_field;
+  PagerOptions m_options;
+  mutable std::mutex m_mutex;
+  std::condition_variable m_wake, m_loaded;
+  std::map<std::size_t, std::shared_ptr<const EncodedPage>> m_resident;
+  static constexpr std::size_t kNone = ~std::size_t(0);
+  std::size_t m_request = kNone, m_loading = kNone, m_current = kNone;
+  bool m_stop = false;
+  PagerStats m_stats;
+  std::thread m_thread;
+};
+
+}  // namespace penumbra::compression

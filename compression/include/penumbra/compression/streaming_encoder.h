@@ -1,0 +1,95 @@
+// compression/include/penumbra/compression/streaming_encoder.h
+#pragma once
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "penumbra/compression/codec_params.h"
+#include "penumbra/compression/field_file.h"
+#include "penumbra/compression/window_codec.h"
+
+namespace penumbra::compression {
+
+struct StreamingOptions {
+  std::string path;        ///< final file; written as path + ".partial" until finish()
+  std::string field_name;
+  std::uint64_t vertex_count = 0;
+  CodecParams codec;
+  /// Bytes the encoder may hold: window buffers plus working memory. With room for two
+  /// windows the solver fills one while the other is encoded; with room for one it waits
+  /// for the encoder at each window boundary (counted). 0: as much as two windows need.
+  std::uint64_t memory_budget_bytes = 0;
+};
+
+struct StreamingStats {
+  std::uint64_t steps = 0, pages = 0, bytes_written = 0;
+  std::uint64_t solver_waits = 0;   ///< push calls that waited for the encoder (finish always waits)
+  double solver_wait_seconds = 0;
+  double encode_seconds = 0;        ///< background time, all windows
+  double max_train_seconds = 0;     ///< slowest LBG training of one window
+  std::uint32_t buffers = 0;        ///< window buffers the budget allowed (1 or 2)
+  std::vector<PageMethod> methods;  ///< how each page was stored
+};
+
+/// Compresses a field as a solver produces it: push() copies one step into the current
+/// window buffer; a full window is encoded and written on a background thread while the
+/// solver goes on; finish() encodes the final (possibly partial) window and completes the
+/// file. Errors from the background thread are rethrown by the next push() or finish().
+class StreamingEncoder {
+public:
+  explicit StreamingEncoder(StreamingOptions options);
+  /// Without finish(): waits for the window being encoded, then leaves path + ".partial"
+  /// holding every finished page (readable with OpenOptions::recover_incomplete).
+  ~StreamingEncoder();
+  StreamingEncoder(const StreamingEncoder&) = delete;
+  StreamingEncoder& operator=(const StreamingEncoder&) = delete;
+
+  /// Adds the next time step (vertex_count values). Throws Error(invalid_argument) naming
+  /// the vertex of a NaN/Inf value; that step is then not recorded.
+  void push(double time, const float* values);
+  void finish();
+  StreamingStats stats() const;
+
+  /// Smallest budget that holds `buffers` window buffers plus the encoder's working memory.
+  static std::uint64_t required_budget(std::uint64_t vertex_count, const CodecParams& codec, std::uint32_t buffers);
+
+private:
+  struct Job {
+    std::size_t buffer;
+    std::uint32_t steps;
+    std::uint64_t first_step;
+    std::vector<double> times;
+    float bound;
+  };
+  void worker_loop();
+  void submit(std::uint32_t steps);
+  void wait_buffer_free(std::size_t buffer, bool count_as_solver_wait);
+  void rethrow_locked();
+
+  StreamingOptions m_options;
+  std::unique_ptr<FieldWriter> m_writer;
+  std::vector<std::vector<float>> m_buffers;
+  std::vector<bool> m_busy;
+  std::size_t m_filling = 0;
+  std::uint32_t m_filled = 0;
+  std::uint64_t m_step = 0;
+  std::vector<double> m_times;
+  float m_min = 0, m_max = 0;
+  bool m_finished = false;
+
+  mutable std::mutex m_mutex;
+  std::condition_variable m_wake, m_done;
+  std::vector<Job> m_jobs;
+  bool m_stop = false;
+  std::exception_ptr m_error;
+  StreamingStats m_stats;
+  WarmStart m_warm;
+  std::thread m_thread;
+};
+
+}  // namespace penumbra::compression

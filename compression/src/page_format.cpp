@@ -1,0 +1,152 @@
+// compression/src/page_format.cpp
+#include "page_format.h"
+
+#include <cmath>
+
+#include "byte_io.h"
+#include "crc32.h"
+#include "predictive_layout.h"
+#include "vertex_section.h"
+
+namespace penumbra::compression::detail {
+
+namespace {
+
+bool has_vq(PageMethod m) { return m != PageMethod::predictive; }
+bool has_blocks(PageMethod m) { return m != PageMethod::vq; }
+
+}  // namespace
+
+std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t page_index) {
+  std::vector<std::uint8_t> bytes(PageHeader::kBytes, 0);
+  ByteWriter w(bytes);
+  w.put_array(p.times);
+  if (has_vq(p.method)) {
+    w.put(p.mean_lo);
+    w.put(p.mean_scale);
+    w.put_array(p.c8);
+    // A partial window stores only the D_W columns of its steps.
+    for (std::uint32_t e = 0; e < p.codebook_size; ++e)
+      w.append(p.cw.data() + std::size_t(e) * p.window, std::size_t(p.step_count) * 4);
+    w.put_array(p.mean_q);
+    w.put_array(p.i8);
+    w.put_array(p.iw);
+  }
+  if (has_blocks(p.method)) {
+    w.put(p.step);
+    w.put(p.lo);
+    w.put(p.first_width);
+    w.put(std::uint32_t(0));
+    w.put_array(p.blocks.group_offsets);
+    w.put_array(p.blocks.widths);
+    w.append(p.blocks.payload.data(), p.blocks.group_offsets.back());  // without the read padding
+  }
+  const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
+  std::uint8_t* h = bytes.data();
+  auto at = [&](std::size_t offset, const auto& value) { std::memcpy(h + offset, &value, sizeof(value)); };
+  at(0, PageHeader::kMagic);
+  at(4, page_index);
+  at(8, p.first_step);
+  at(16, p.step_count);
+  at(20, std::uint32_t(p.method));
+  at(24, payload_bytes);
+  at(32, p.value_min);
+  at(36, p.value_max);
+  at(40, p.bound);
+  at(44, crc32(bytes.data() + PageHeader::kBytes, payload_bytes));
+  at(48, p.sample_snr_db);
+  at(52, p.vq_bytes_estimate);
+  at(56, p.predictive_bytes_estimate);
+  at(60, crc32(h, 60));
+  return bytes;
+}
+
+bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
+  std::uint32_t magic, crc;
+  std::memcpy(&magic, h, 4);
+  std::memcpy(&crc, h + 60, 4);
+  if (magic != PageHeader::kMagic || crc != crc32(h, 60)) return false;
+  std::memcpy(&header.page_index, h + 4, 4);
+  std::memcpy(&header.first_step, h + 8, 8);
+  std::memcpy(&header.step_count, h + 16, 4);
+  std::memcpy(&header.method, h + 20, 4);
+  std::memcpy(&header.payload_bytes, h + 24, 8);
+  std::memcpy(&header.value_min, h + 32, 4);
+  std::memcpy(&header.value_max, h + 36, 4);
+  std::memcpy(&header.bound, h + 40, 4);
+  std::memcpy(&header.payload_crc, h + 44, 4);
+  std::memcpy(&header.sample_snr_db, h + 48, 4);
+  std::memcpy(&header.vq_bytes_estimate, h + 52, 4);
+  std::memcpy(&header.predictive_bytes_estimate, h + 56, 4);
+  return true;
+}
+
+EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
+                               std::uint32_t K, const std::string& name) {
+  ByteReader r(payload, h.payload_bytes, name);
+  if (h.method > 2) r.fail("unknown method " + std::to_string(h.method));
+  if (h.step_count < 1 || h.step_count > W) r.fail("step count " + std::to_string(h.step_count) + " outside 1..window");
+  EncodedPage p;
+  p.method = PageMethod(h.method);
+  p.first_step = h.first_step;
+  p.step_count = h.step_count;
+  p.window = W;
+  p.codebook_size = K;
+  p.vertex_count = N;
+  p.value_min = h.value_min;
+  p.value_max = h.value_max;
+  p.bound = h.bound;
+  p.sample_snr_db = h.sample_snr_db;
+  p.vq_bytes_estimate = h.vq_bytes_estimate;
+  p.predictive_bytes_estimate = h.predictive_bytes_estimate;
+  r.get_array(p.times, h.step_count);
+  if (has_vq(p.method)) {
+    p.mean_lo = r.get<float>();
+    p.mean_scale = r.get<float>();
+    r.get_array(p.c8, std::uint64_t(K) * 8);
+    p.cw.assign(std::size_t(K) * W, 0.f);
+    for (std::uint32_t e = 0; e < K; ++e) r.take(p.cw.data() + std::size_t(e) * W, std::size_t(h.step_count) * 4);
+    r.get_array(p.mean_q, N);
+    r.get_array(p.i8, N);
+    r.get_array(p.iw, N);
+    for (std::uint64_t v = 0; v < N; ++v)
+      if (p.i8[v] >= K || p.iw[v] >= K) r.fail("codebook index out of range at vertex " + std::to_string(v));
+  }
+  if (has_blocks(p.method)) {
+    p.step = r.get<float>();
+    p.lo = r.get<float>();
+    p.first_width = r.get<std::uint32_t>();
+    r.get<std::uint32_t>();
+    if (p.method == PageMethod::predictive && (p.first_width < 1 || p.first_width > 31))
+      r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
+    if (!std::isfinite(p.step) || !std::isfinite(p.lo)) r.fail("non-finite quantisation step");
+    const std::uint64_t groups = (N + BitBlocks::kGroupSize - 1) / BitBlocks::kGroupSize;
+    r.get_array(p.blocks.group_offsets, groups + 1);
+    r.get_array(p.blocks.widths, (N + 1) / 2);
+    const std::uint64_t payload_bytes = p.blocks.group_offsets.back();
+    if (payload_bytes != r.remaining()) r.fail("bit payload size does not match its group table");
+    if (p.blocks.group_offsets[0] != 0) r.fail("bit payload does not start at 0");
+    for (std::uint64_t g = 0; g < groups; ++g)
+      if (p.blocks.group_offsets[g] > p.blocks.group_offsets[g + 1] || p.blocks.group_offsets[g + 1] > payload_bytes)
+        r.fail("group table is not increasing at vertex group " + std::to_string(g));
+    r.get_array(p.blocks.payload, payload_bytes, 8);
+    // Every group's sections must fill exactly its bytes, each parsed without reading past
+    // its group: the decoder then never reads outside the payload.
+    VertexSection s;
+    for (std::uint64_t g = 0; g < groups; ++g) {
+      std::uint64_t pos = p.blocks.group_offsets[g] * 8;
+      const std::uint64_t limit = p.blocks.group_offsets[g + 1] * 8;
+      for (std::uint64_t v = g * BitBlocks::kGroupSize; v < std::min(N, (g + 1) * BitBlocks::kGroupSize); ++v) {
+        if (!parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), limit, s))
+          r.fail("bits of vertex " + std::to_string(v) + " run past their group");
+        pos = s.end;
+      }
+      if ((pos + 7) / 8 != p.blocks.group_offsets[g + 1])
+        r.fail("bit block of vertex group " + std::to_string(g) + " has the wrong size");
+    }
+  }
+  if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the payload");
+  return p;
+}
+
+}  // namespace penumbra::compression::detail

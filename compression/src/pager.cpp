@@ -1,0 +1,139 @@
+// compression/src/pager.cpp -- current + next page resident, next page prefetched in background.
+#include "penumbra/compression/pager.h"
+
+#include <chrono>
+#include <string>
+
+#include "penumbra/compression/window_codec.h"
+#include "penumbra/core/error.h"
+
+namespace penumbra::compression {
+
+Pager::Pager(std::shared_ptr<const CompressedField> field, PagerOptions options)
+    : m_field(std::move(field)), m_options(options) {
+  require(m_field != nullptr, "Pager: null field");
+  if (m_options.memory_cap_bytes)
+    for (std::size_t i = 0; i < m_field->page_count(); ++i)
+      if (m_field->page(i).bytes > m_options.memory_cap_bytes)
+        throw Error(ErrorCode::out_of_memory, "Pager: memory cap of " + std::to_string(m_options.memory_cap_bytes) +
+                                                  " bytes is below the " + std::to_string(m_field->page(i).bytes) +
+                                                  " bytes of page " + std::to_string(i));
+  if (m_options.prefetch) {
+    m_thread = std::thread([this] { prefetch_loop(); });
+    // Playback usually starts at step 0: have its page on the way before the first read.
+    std::lock_guard<std::mutex> lock(m_mutex);
+    if (m_field->page_count() > 0) request_prefetch_locked(0);
+  }
+}
+
+Pager::~Pager() {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_stop = true;
+  }
+  m_wake.notify_all();
+  if (m_thread.joinable()) m_thread.join();
+}
+
+PagerStats Pager::stats() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_stats;
+}
+
+void Pager::insert_locked(std::size_t page, std::shared_ptr<const EncodedPage> data) {
+  if (m_resident.count(page)) return;
+  m_stats.resident_bytes += data->resident_bytes();
+  m_stats.peak_resident_bytes = std::max(m_stats.peak_resident_bytes, m_stats.resident_bytes);
+  m_resident.emplace(page, std::move(data));
+}
+
+void Pager::evict_locked(std::size_t keep_a, std::size_t keep_b) {
+  for (auto it = m_resident.begin(); it != m_resident.end();) {
+    if (it->first == keep_a || it->first == keep_b) {
+      ++it;
+    } else {
+      m_stats.resident_bytes -= it->second->resident_bytes();
+      it = m_resident.erase(it);
+    }
+  }
+}
+
+void Pager::request_prefetch_locked(std::size_t page) {
+  if (!m_options.prefetch || page >= m_field->page_count() || m_resident.count(page) || m_loading == page) return;
+  if (m_options.memory_cap_bytes) {
+    // On-disk size stands in for the loaded size (they differ by a few vector headers).
+    std::uint64_t held = 0;
+    for (const auto& [index, data] : m_resident)
+      if (index == m_current) held += data->resident_bytes();
+    if (held + m_field->page(page).bytes + 4096 > m_options.memory_cap_bytes) return;
+  }
+  m_request = page;
+  m_wake.notify_all();
+}
+
+void Pager::prefetch_loop() {
+  std::unique_lock<std::mutex> lock(m_mutex);
+  while (true) {
+    m_wake.wait(lock, [&] { return m_stop || m_request != kNone; });
+    if (m_stop) return;
+    const std::size_t page = m_request;
+    m_request = kNone;
+    if (m_resident.count(page)) continue;
+    m_loading = page;
+    lock.unlock();
+    std::shared_ptr<const EncodedPage> data;
+    try {
+      data = m_field->load_page(page);
+    } catch (const Error&) {
+      // A bad page is reported by the read that needs it (loaded again there).
+    }
+    lock.lock();
+    m_loading = kNone;
+    if (data) {
+      ++m_stats.loads;
+      ++m_stats.prefetched;
+      // Keep it only if playback still wants it (current or the one after).
+      if (page == m_current || page == m_current + 1 || m_current == kNone) insert_locked(page, std::move(data));
+    }
+    m_loaded.notify_all();
+  }
+}
+
+void Pager::read_step(std::uint64_t step, float* out) {
+  require(out != nullptr, "Pager::read_step: null output");
+  const std::size_t page = m_field->page_of_step(step);
+  std::shared_ptr<const EncodedPage> data;
+  {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    ++m_stats.reads;
+    auto it = m_resident.find(page);
+    if (it == m_resident.end()) {
+      ++m_stats.stalls;
+      const auto start = std::chrono::steady_clock::now();
+      if (m_loading == page) {
+        m_loaded.wait(lock, [&] { return m_loading != page; });
+        it = m_resident.find(page);
+      }
+      if (it == m_resident.end()) {
+        lock.unlock();
+        auto loaded = m_field->load_page(page);  // throws naming the page if it is bad
+        lock.lock();
+        ++m_stats.loads;
+        m_current = page;
+        evict_locked(page, page + 1);
+        insert_locked(page, std::move(loaded));
+        it = m_resident.find(page);
+      }
+      m_stats.stall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    data = it->second;
+    if (m_current != page) {
+      m_current = page;
+      evict_locked(page, page + 1);
+    }
+    request_prefetch_locked(page + 1);
+  }
+  decode_step(*data, std::uint32_t(step - data->first_step), out);
+}
+
+}  // namespace penumbra::compression

@@ -1,0 +1,249 @@
+// tests/unit/compression/codec_test.cpp -- LBG training and the window codec's round trips.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "penumbra/compression/lbg.h"
+#include "penumbra/compression/window_codec.h"
+#include "penumbra/core/error.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+using testing::SyntheticField;
+
+struct Errors {
+  double max_abs = 0, psnr_db = 0;
+};
+
+Errors compare(const float* ref, const float* got, std::size_t count, double range) {
+  double se = 0, mx = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double d = std::fabs(double(ref[i]) - got[i]);
+    se += d * d;
+    mx = std::max(mx, d);
+  }
+  const double mse = se / double(count);
+  return {mx, mse > 0 ? 10 * std::log10(range * range / mse) : 400.0};
+}
+
+EncodedPage encode(const SyntheticField& f, std::uint32_t first, std::uint32_t count, const CodecParams& p,
+                   float bound = 0, WarmStart* warm = nullptr) {
+  return encode_window(f.values.data() + std::uint64_t(first) * f.vertices, f.vertices, count, f.times.data() + first,
+                       first, p, bound, warm);
+}
+
+TEST(Lbg, RecoversWellSeparatedClustersAndIsDeterministic) {
+  // 8 clusters in 4-D, tight around known centres: an 8-entry codebook must find them all.
+  std::vector<float> centres(8 * 4), data;
+  for (int c = 0; c < 8; ++c)
+    for (int j = 0; j < 4; ++j) centres[c * 4 + j] = float(((c >> (j % 3)) & 1) * 10 + j);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.f, 0.05f);
+  for (int i = 0; i < 800; ++i)
+    for (int j = 0; j < 4; ++j) data.push_back(centres[(i % 8) * 4 + j] + noise(rng));
+  LbgOptions o;
+  o.codebook_size = 8;
+  double mse = 0;
+  const auto cb = train_lbg(data.data(), 800, 4, o, nullptr, &mse);
+  EXPECT_LT(mse, 4 * 0.05 * 0.05 * 1.5);  // 4 dims of variance 0.0025, with 50% slack
+  for (int c = 0; c < 8; ++c) {
+    double best = 1e30;
+    for (int e = 0; e < 8; ++e) {
+      double d = 0;
+      for (int j = 0; j < 4; ++j) d += std::pow(cb[e * 4 + j] - centres[c * 4 + j], 2);
+      best = std::min(best, d);
+    }
+    EXPECT_LT(best, 0.01) << "centre " << c;
+  }
+  EXPECT_EQ(cb, train_lbg(data.data(), 800, 4, o));
+  o.seed = 99;  // a different seed still converges to the same centres (up to order)
+  EXPECT_EQ(train_lbg(data.data(), 800, 4, o).size(), cb.size());
+}
+
+TEST(Lbg, NearestSearchMatchesBruteForce) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-1, 1);
+  const std::uint32_t k = 37, dim = 13;
+  std::vector<float> cb(k * dim), x(101 * dim);
+  for (auto& c : cb) c = u(rng);
+  for (auto& c : x) c = u(rng);
+  NearestSearch s(cb.data(), k, dim);
+  std::vector<std::uint8_t> idx(101);
+  s.nearest(x.data(), 101, idx.data());
+  for (int i = 0; i < 101; ++i) {
+    double best = 1e30;
+    int arg = -1;
+    for (std::uint32_t e = 0; e < k; ++e) {
+      double d = 0;
+      for (std::uint32_t j = 0; j < dim; ++j) d += std::pow(double(x[i * dim + j]) - cb[e * dim + j], 2);
+      if (d < best) best = d, arg = int(e);
+    }
+    double got = 0;
+    for (std::uint32_t j = 0; j < dim; ++j) got += std::pow(double(x[i * dim + j]) - cb[idx[i] * dim + j], 2);
+    EXPECT_LE(got, best + 1e-5) << "vector " << i << " best " << arg;
+  }
+}
+
+TEST(WindowCodec, SmoothFieldRoundTripIsAccurateAndCompact) {
+  const auto f = testing::smooth_blobs(6000, 64);
+  const CodecParams p;
+  const auto page = encode(f, 0, 64, p);
+  EXPECT_EQ(page.method, PageMethod::vq);
+  std::vector<float> out(f.values.size());
+  decode_window(page, out.data());
+  const auto e = compare(f.values.data(), out.data(), out.size(), f.range());
+  // 4 bytes per vertex and window carry the series; measured ~47 dB here, require 40.
+  EXPECT_GT(e.psnr_db, 40.0);
+  EXPECT_EQ(page.mean_q.size() * 2 + page.i8.size() + page.iw.size(), 4u * f.vertices);
+}
+
+TEST(WindowCodec, StepWindowAndVertexDecodesAreBitIdentical) {
+  const auto f = testing::shock_front(3000, 64);
+  for (float bound : {0.f, 1e-2f * f.range()}) {
+    const auto page = encode(f, 0, 64, CodecParams{}, bound);
+    std::vector<float> all(f.values.size()), step(f.vertices), series(64);
+    decode_window(page, all.data());
+    for (std::uint32_t t : {0u, 17u, 63u}) {
+      decode_step(page, t, step.data());
+      EXPECT_EQ(0, std::memcmp(step.data(), all.data() + t * f.vertices, step.size() * 4)) << "step " << t;
+    }
+    for (std::uint64_t v : {0ull, 1234ull, 2999ull}) {
+      decode_vertex(page, v, series.data());
+      for (std::uint32_t t = 0; t < 64; ++t) ASSERT_EQ(series[t], all[t * f.vertices + v]) << v << "," << t;
+    }
+  }
+}
+
+TEST(WindowCodec, BoundHeldAtEveryValueAcrossAJumpInTime) {
+  const auto f = testing::shock_front(4000, 64);
+  for (double rel : {1e-2, 1e-3, 1e-5}) {
+    const float bound = float(rel * f.range());
+    const auto page = encode(f, 0, 64, CodecParams{}, bound);
+    EXPECT_NE(page.method, PageMethod::vq);
+    std::vector<float> out(f.values.size());
+    decode_window(page, out.data());
+    const auto e = compare(f.values.data(), out.data(), out.size(), f.range());
+    EXPECT_LE(e.max_abs, bound) << "rel " << rel << " method " << to_string(page.method);
+  }
+}
+
+TEST(WindowCodec, NoiseIsDetectedAsVqPoorAndCodedPredictively) {
+  const auto f = testing::white_noise(3000, 64);
+  const float bound = 1e-2f * f.range();
+  WindowStats stats;
+  const auto page = encode_window(f.values.data(), f.vertices, 64, f.times.data(), 0, CodecParams{}, bound, nullptr, &stats);
+  EXPECT_EQ(page.method, PageMethod::predictive);
+  EXPECT_LT(stats.predictive_bytes_estimate, stats.vq_bytes_estimate);
+  EXPECT_LT(stats.sample_snr_db, 6.0);
+  std::vector<float> out(f.values.size());
+  decode_window(page, out.data());
+  EXPECT_LE(compare(f.values.data(), out.data(), out.size(), f.range()).max_abs, bound);
+  // Unbounded, noise falls back to the predictive coder at VQ's own RMS error.
+  const auto unbounded = encode(f, 0, 64, CodecParams{});
+  EXPECT_EQ(unbounded.method, PageMethod::predictive);
+  decode_window(unbounded, out.data());
+  EXPECT_LE(compare(f.values.data(), out.data(), out.size(), f.range()).max_abs, unbounded.bound);
+}
+
+TEST(WindowCodec, PartialWindowDecodesOnlyItsSteps) {
+  const auto f = testing::smooth_blobs(2000, 20);
+  const auto page = encode(f, 0, 20, CodecParams{});
+  EXPECT_EQ(page.step_count, 20u);
+  std::vector<float> out(f.values.size());
+  decode_window(page, out.data());
+  EXPECT_GT(compare(f.values.data(), out.data(), out.size(), f.range()).psnr_db, 40.0);
+  std::vector<float> step(f.vertices);
+  EXPECT_THROW(decode_step(page, 20, step.data()), Error);
+}
+
+TEST(WindowCodec, WarmStartCarriesCodebooksAndKeepsQuality) {
+  const auto f = testing::smooth_blobs(4000, 128);
+  WarmStart warm;
+  CodecParams p;
+  const auto first = encode(f, 0, 64, p, 0, &warm);
+  EXPECT_EQ(warm.c8, first.c8);
+  const auto second = encode(f, 64, 64, p, 0, &warm);
+  std::vector<float> out(f.vertices * 64);
+  decode_window(second, out.data());
+  EXPECT_GT(compare(f.values.data() + 64 * f.vertices, out.data(), out.size(), f.range()).psnr_db, 40.0);
+  EXPECT_EQ(second.first_step, 64u);
+  EXPECT_DOUBLE_EQ(second.times[0], f.times[64]);
+}
+
+TEST(WindowCodec, FixedSeedGivesIdenticalPages) {
+  const auto f = testing::smooth_blobs(3000, 64);
+  const auto a = encode(f, 0, 64, CodecParams{}, 1e-3f);
+  const auto b = encode(f, 0, 64, CodecParams{}, 1e-3f);
+  EXPECT_EQ(a.c8, b.c8);
+  EXPECT_EQ(a.cw, b.cw);
+  EXPECT_EQ(a.i8, b.i8);
+  EXPECT_EQ(a.iw, b.iw);
+  EXPECT_EQ(a.mean_q, b.mean_q);
+  EXPECT_EQ(a.blocks.payload, b.blocks.payload);
+}
+
+TEST(WindowCodec, NonFiniteInputIsRejectedNamingStepAndVertex) {
+  auto f = testing::smooth_blobs(500, 16);
+  f.values[5 * 500 + 42] = std::numeric_limits<float>::quiet_NaN();
+  try {
+    encode(f, 0, 16, CodecParams{});
+    FAIL() << "NaN accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(std::string(e.what()).find("step 5, vertex 42 is NaN"), std::string::npos) << e.what();
+  }
+  f.values[5 * 500 + 42] = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(encode(f, 0, 16, CodecParams{}), Error);
+}
+
+TEST(WindowCodec, BadParametersAreRejected) {
+  const auto f = testing::smooth_blobs(100, 16);
+  CodecParams p;
+  p.window = 12;
+  EXPECT_THROW(encode(f, 0, 12, p), Error);
+  p = CodecParams{};
+  p.codebook_size = 300;
+  EXPECT_THROW(encode(f, 0, 16, p), Error);
+  p = CodecParams{};
+  EXPECT_THROW(encode(f, 0, 65, p), Error);
+}
+
+}  // namespace
+}  // namespace penumbra::compression
+
+namespace penumbra::compression {
+namespace {
+
+TEST(WindowCodec, IsolatedOutliersArePatchedAndStayRandomlyAccessible) {
+  // A smooth field plus one large spike per vertex at a vertex-dependent step: the residual
+  // blocks should store the spike as an exception (code 14) rather than widen all 64 values.
+  auto f = testing::smooth_blobs(2000, 64);
+  const float spike = 0.5f * f.range();
+  for (std::uint64_t v = 0; v < f.vertices; ++v) f.values[(v * 7 % 64) * f.vertices + v] += spike;
+  const float bound = 1e-2f * f.range();
+  const auto page = encode(f, 0, 64, CodecParams{}, bound);
+  ASSERT_NE(page.method, PageMethod::vq);
+  std::size_t patched = 0;
+  for (std::uint64_t v = 0; v < f.vertices; ++v) patched += page.blocks.width(v) == 14;
+  EXPECT_GT(patched, f.vertices / 2) << to_string(page.method);
+  std::vector<float> all(f.values.size()), one(64), step(f.vertices);
+  decode_window(page, all.data());
+  EXPECT_LE(compare(f.values.data(), all.data(), all.size(), f.range()).max_abs, bound);
+  for (std::uint64_t v : {0ull, 9ull, 1999ull}) {
+    decode_vertex(page, v, one.data());
+    for (std::uint32_t t = 0; t < 64; ++t) ASSERT_EQ(one[t], all[t * f.vertices + v]);
+  }
+  for (std::uint32_t t : {0u, 7u, 63u}) {
+    decode_step(page, t, step.data());
+    ASSERT_EQ(0, std::memcmp(step.data(), all.data() + t * f.vertices, step.size() * 4));
+  }
+  EXPECT_GT(page.vq_bytes_estimate, 0.f);
+  EXPECT_GT(page.predictive_bytes_estimate, 0.f);
+}
+
+}  // namespace
+}  // namespace penumbra::compression

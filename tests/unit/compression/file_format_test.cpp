@@ -1,0 +1,163 @@
+// tests/unit/compression/file_format_test.cpp -- field files: round trip, truncation, corruption.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "penumbra/compression/field_file.h"
+#include "penumbra/compression/streaming_encoder.h"
+#include "penumbra/compression/window_codec.h"
+#include "penumbra/core/error.h"
+#include "temp_path.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+using testing::temp_path;
+
+// Writes f with the streaming encoder (window 8, small codebooks keep the file small).
+void write_field(const testing::SyntheticField& f, const std::string& path, CodecParams p) {
+  StreamingOptions o;
+  o.path = path;
+  o.field_name = "temperature";
+  o.vertex_count = f.vertices;
+  o.codec = p;
+  StreamingEncoder enc(o);
+  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
+  enc.finish();
+}
+
+CodecParams small_params(ErrorBound bound = {}) {
+  CodecParams p;
+  p.window = 8;
+  p.codebook_size = 4;
+  p.bound = bound;
+  return p;
+}
+
+TEST(FieldFile, RoundTripKeepsMetadataAndMatchesThePages) {
+  const auto f = testing::shock_front(1000, 21);
+  const std::string path = temp_path("rt.pnbf");
+  CodecParams p;
+  p.window = 16;
+  p.bound = {BoundKind::range_relative, 1e-3};
+  write_field(f, path, p);
+  const auto field = CompressedField::open(path);
+  EXPECT_EQ(field->info().name, "temperature");
+  EXPECT_EQ(field->info().vertex_count, 1000u);
+  EXPECT_EQ(field->info().window, 16u);
+  EXPECT_EQ(field->info().bound.kind, BoundKind::range_relative);
+  EXPECT_EQ(field->step_count(), 21u);
+  EXPECT_EQ(field->page_count(), 2u);  // 16 + a partial window of 5
+  EXPECT_EQ(field->page(1).step_count, 5u);
+  EXPECT_EQ(field->times(), f.times);
+  EXPECT_FLOAT_EQ(field->value_max() - field->value_min(), f.range());
+  EXPECT_EQ(field->page_of_step(15), 0u);
+  EXPECT_EQ(field->page_of_step(16), 1u);
+  EXPECT_THROW(field->page_of_step(21), Error);
+  field->verify();
+  std::vector<float> out(1000);
+  for (std::uint32_t t = 0; t < 21; ++t) {
+    field->read_step(t, out.data());
+    for (std::uint64_t v = 0; v < 1000; ++v)
+      ASSERT_LE(std::fabs(out[v] - f.values[t * 1000 + v]), 1e-3 * f.range() * (1 + 1e-6)) << t << "," << v;
+  }
+  EXPECT_LT(field->file_bytes(), field->raw_bytes());
+}
+
+TEST(FieldFile, EveryTruncatedPrefixIsRejectedNamingWhereItBreaks) {
+  const auto f = testing::smooth_blobs(40, 20);
+  const std::string path = temp_path("full.pnbf"), cut = temp_path("cut.pnbf");
+  write_field(f, path, small_params({BoundKind::absolute, 1e-3}));
+  const auto bytes = testing::read_file(path);
+  const auto field = CompressedField::open(path);
+  ASSERT_EQ(field->page_count(), 3u);
+  const std::uint64_t first_page = field->page(0).offset;
+  for (std::size_t size = 0; size < bytes.size(); ++size) {
+    testing::write_file(cut, bytes.data(), size);
+    try {
+      CompressedField::open(cut);
+      ADD_FAILURE() << "prefix of " << size << " bytes accepted";
+    } catch (const Error& e) {
+      ASSERT_EQ(e.code(), ErrorCode::io_error);
+      const std::string msg = e.what();
+      if (size > first_page) {
+        ASSERT_TRUE(msg.find("page ") != std::string::npos) << size << ": " << msg;
+      }
+      if (size > first_page && size < field->page(1).offset) {
+        ASSERT_TRUE(msg.find("page 0") != std::string::npos) << size << ": " << msg;
+      }
+    }
+  }
+  // Recovery keeps exactly the complete pages of a prefix.
+  testing::write_file(cut, bytes.data(), field->page(2).offset + 10);
+  const auto partial = CompressedField::open(cut, {.recover_incomplete = true});
+  EXPECT_EQ(partial->page_count(), 2u);
+  EXPECT_EQ(partial->step_count(), 16u);
+  std::vector<float> a(40), b(40);
+  partial->read_step(9, a.data());
+  field->read_step(9, b.data());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * 4));
+}
+
+TEST(FieldFile, CorruptBytesAreDetectedAndNamed) {
+  const auto f = testing::smooth_blobs(40, 20);
+  const std::string path = temp_path("full.pnbf"), bad = temp_path("bad.pnbf");
+  write_field(f, path, small_params({BoundKind::absolute, 1e-3}));
+  const auto bytes = testing::read_file(path);
+  const auto field = CompressedField::open(path);
+  // Flip every byte in turn: opening or loading
+  // the affected page must fail with an io_error, never crash or decode garbage.
+  std::vector<float> out(40);
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    auto copy = bytes;
+    copy[i] ^= 0x5A;
+    testing::write_file(bad, copy.data(), copy.size());
+    bool rejected = false;
+    try {
+      const auto g = CompressedField::open(bad);
+      g->verify();
+    } catch (const Error& e) {
+      rejected = true;
+      EXPECT_EQ(e.code(), ErrorCode::io_error);
+      if (i >= field->page(1).offset && i < field->page(2).offset) {
+        EXPECT_NE(std::string(e.what()).find("page 1"), std::string::npos) << i << ": " << e.what();
+      }
+    }
+    EXPECT_TRUE(rejected) << "flipped byte " << i << " of " << bytes.size() << " went unnoticed";
+  }
+}
+
+TEST(FieldFile, NotAFieldFileAndMissingFileAreClearErrors) {
+  const std::string path = temp_path("junk.pnbf");
+  const std::string junk(200, 'x');
+  testing::write_file(path, junk.data(), junk.size());
+  try {
+    CompressedField::open(path);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad magic"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(CompressedField::open(temp_path("missing.pnbf")), Error);
+}
+
+TEST(FieldFile, UnfinishedRunLeavesARecoverablePartialFile) {
+  const auto f = testing::smooth_blobs(300, 40);
+  const std::string path = temp_path("run.pnbf");
+  {
+    StreamingOptions o;
+    o.path = path;
+    o.vertex_count = 300;
+    o.codec = small_params();
+    StreamingEncoder enc(o);
+    for (std::uint32_t t = 0; t < 27; ++t) enc.push(f.times[t], f.values.data() + t * 300);
+    // no finish(): the solver "died"
+  }
+  EXPECT_THROW(CompressedField::open(path), Error);
+  EXPECT_THROW(CompressedField::open(path + ".partial"), Error);
+  const auto rec = CompressedField::open(path + ".partial", {.recover_incomplete = true});
+  EXPECT_EQ(rec->step_count(), 24u);  // three full windows of 8; the 3 buffered steps are lost
+}
+
+}  // namespace
+}  // namespace penumbra::compression

@@ -1,0 +1,157 @@
+// tests/unit/compression/pager_streaming_test.cpp -- pager playback and the streaming encoder.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include "penumbra/compression/pager.h"
+#include "penumbra/compression/streaming_encoder.h"
+#include "penumbra/core/error.h"
+#include "temp_path.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+using testing::temp_path;
+
+std::shared_ptr<const CompressedField> make_field(const testing::SyntheticField& f, const std::string& path,
+                                                  CodecParams p, StreamingStats* stats = nullptr,
+                                                  std::uint64_t budget = 0) {
+  StreamingOptions o;
+  o.path = path;
+  o.field_name = "f";
+  o.vertex_count = f.vertices;
+  o.codec = p;
+  o.memory_budget_bytes = budget;
+  StreamingEncoder enc(o);
+  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
+  enc.finish();
+  if (stats) *stats = enc.stats();
+  return CompressedField::open(path);
+}
+
+CodecParams params(std::uint32_t window, ErrorBound bound = {}) {
+  CodecParams p;
+  p.window = window;
+  p.codebook_size = 64;
+  p.bound = bound;
+  return p;
+}
+
+TEST(Pager, PagedEqualsUnpagedBitForBitInAnyOrder) {
+  const auto f = testing::shock_front(2000, 70);
+  const auto field = make_field(f, temp_path("p.pnbf"), params(16, {BoundKind::range_relative, 1e-3}));
+  Pager pager(field);
+  std::vector<float> a(2000), b(2000);
+  std::vector<std::uint64_t> order;
+  for (std::uint64_t t = 0; t < 70; ++t) order.push_back(t);
+  for (std::uint64_t t : {69, 3, 40, 41, 0, 17, 68, 16}) order.push_back(t);  // random access too
+  for (std::uint64_t t : order) {
+    pager.read_step(t, a.data());
+    field->read_step(t, b.data());
+    ASSERT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * 4)) << "step " << t;
+  }
+  const auto s = pager.stats();
+  EXPECT_EQ(s.reads, order.size());
+  EXPECT_LE(s.peak_resident_bytes, 2 * field->page(0).bytes + 8192);
+}
+
+TEST(Pager, SequentialPlaybackDoesNotStall) {
+  const auto f = testing::smooth_blobs(3000, 64);
+  const auto field = make_field(f, temp_path("s.pnbf"), params(16));
+  Pager pager(field);
+  std::vector<float> out(3000);
+  // Give the prefetch thread the time a renderer would take per frame (1 ms).
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  for (std::uint64_t t = 0; t < 64; ++t) {
+    pager.read_step(t, out.data());
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const auto s = pager.stats();
+  EXPECT_EQ(s.stalls, 0u);
+  EXPECT_EQ(s.loads, 4u);
+  EXPECT_EQ(s.prefetched, 4u);
+}
+
+TEST(Pager, MemoryCapLimitsResidencyAndTooSmallACapIsRejected) {
+  const auto f = testing::smooth_blobs(3000, 48);
+  const auto field = make_field(f, temp_path("c.pnbf"), params(16));
+  const std::uint64_t page_bytes = field->page(0).bytes;
+  EXPECT_THROW(Pager(field, {.memory_cap_bytes = page_bytes / 2}), Error);
+  // Room for one page only: no prefetch, every page switch is a (counted) stall.
+  Pager pager(field, {.memory_cap_bytes = page_bytes + page_bytes / 2});
+  std::vector<float> out(3000), ref(3000);
+  for (std::uint64_t t = 0; t < 48; ++t) {
+    pager.read_step(t, out.data());
+    field->read_step(t, ref.data());
+    ASSERT_EQ(0, std::memcmp(out.data(), ref.data(), out.size() * 4));
+  }
+  const auto s = pager.stats();
+  EXPECT_LE(s.peak_resident_bytes, page_bytes + page_bytes / 2);
+  EXPECT_GE(s.stalls, 2u);
+}
+
+TEST(StreamingEncoder, MatchesOneShotEncodingAndFlushesThePartialWindow) {
+  const auto f = testing::smooth_blobs(2500, 45);
+  StreamingStats stats;
+  const auto field = make_field(f, temp_path("s.pnbf"), params(16), &stats);
+  EXPECT_EQ(stats.pages, 3u);
+  EXPECT_EQ(stats.steps, 45u);
+  EXPECT_EQ(stats.buffers, 2u);
+  EXPECT_EQ(field->page(2).step_count, 13u);
+  // The background encoder writes what encode_window gives on the same data, warm-started.
+  WarmStart warm;
+  std::vector<float> got(2500), want(2500);
+  for (std::uint32_t w = 0; w < 3; ++w) {
+    const std::uint32_t first = w * 16, n = std::min(16u, 45u - first);
+    const auto page = encode_window(f.values.data() + std::uint64_t(first) * 2500, 2500, n, f.times.data() + first,
+                                    first, params(16), 0, &warm);
+    for (std::uint32_t t = 0; t < n; ++t) {
+      decode_step(page, t, want.data());
+      field->read_step(first + t, got.data());
+      ASSERT_EQ(0, std::memcmp(got.data(), want.data(), got.size() * 4)) << first + t;
+    }
+  }
+}
+
+TEST(StreamingEncoder, BudgetChoosesBuffersOrIsRejected) {
+  const auto f = testing::smooth_blobs(1000, 40);
+  const auto p = params(16);
+  const auto one = StreamingEncoder::required_budget(1000, p, 1);
+  StreamingStats stats;
+  const auto field = make_field(f, temp_path("b.pnbf"), p, &stats, one);
+  EXPECT_EQ(stats.buffers, 1u);
+  EXPECT_EQ(field->step_count(), 40u);
+  StreamingOptions o;
+  o.path = temp_path("tiny.pnbf");
+  o.vertex_count = 1000;
+  o.codec = p;
+  o.memory_budget_bytes = one - 1;
+  EXPECT_THROW(StreamingEncoder{o}, Error);
+}
+
+TEST(StreamingEncoder, NonFiniteStepIsRejectedAndNotRecorded) {
+  const auto f = testing::smooth_blobs(500, 20);
+  StreamingOptions o;
+  o.path = temp_path("nan.pnbf");
+  o.vertex_count = 500;
+  o.codec = params(8);
+  StreamingEncoder enc(o);
+  std::vector<float> bad(f.values.begin(), f.values.begin() + 500);
+  bad[7] = std::nanf("");
+  for (std::uint32_t t = 0; t < 20; ++t) {
+    if (t == 10) {
+      EXPECT_THROW(enc.push(99.0, bad.data()), Error);
+    }
+    enc.push(f.times[t], f.values.data() + t * 500);
+  }
+  enc.finish();
+  const auto field = CompressedField::open(o.path);
+  EXPECT_EQ(field->step_count(), 20u);
+  EXPECT_EQ(field->times(), f.times);
+}
+
+}  // namespace
+}  // namespace penumbra::compression

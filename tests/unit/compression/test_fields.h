@@ -1,0 +1,77 @@
+// tests/unit/compression/test_fields.h -- small synthetic time-varying fields, step-major.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+namespace penumbra::compression::testing {
+
+/// Vertices on a jittered 1D-ish line in [0,1]^2; field[t * n + v].
+struct SyntheticField {
+  std::uint64_t vertices;
+  std::uint32_t steps;
+  std::vector<float> values;
+  std::vector<double> times;
+  float range() const {
+    float lo = values[0], hi = values[0];
+    for (float x : values) lo = std::min(lo, x), hi = std::max(hi, x);
+    return hi - lo;
+  }
+};
+
+inline void vertex_position(std::uint64_t v, std::uint64_t n, double& x, double& y) {
+  std::mt19937_64 rng(v * 7919 + 17);
+  std::uniform_real_distribution<double> u(0, 1);
+  x = u(rng);
+  y = u(rng);
+  (void)n;
+}
+
+/// Gaussian blobs drifting across the unit square: smooth in time at every vertex.
+inline SyntheticField smooth_blobs(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    f.times[t] = 0.1 * t;
+    const double s = double(t) / steps;
+    for (std::uint64_t v = 0; v < n; ++v) {
+      double x, y;
+      vertex_position(v, n, x, y);
+      double val = 0;
+      const double cx[3] = {0.2 + 0.5 * s, 0.8 - 0.4 * s, 0.5}, cy[3] = {0.3, 0.6 + 0.2 * s, 0.2 + 0.6 * s};
+      for (int b = 0; b < 3; ++b) {
+        const double r2 = (x - cx[b]) * (x - cx[b]) + (y - cy[b]) * (y - cy[b]);
+        val += (1.0 + 0.3 * b) * std::exp(-r2 / 0.02);
+      }
+      f.values[t * n + v] = float(val);
+    }
+  }
+  return f;
+}
+
+/// A front x = 0.2 + 0.6 s travelling across the domain with a unit jump, plus a gentle slope.
+inline SyntheticField shock_front(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    f.times[t] = t;
+    const double front = 0.1 + 0.8 * double(t) / steps;
+    for (std::uint64_t v = 0; v < n; ++v) {
+      double x, y;
+      vertex_position(v, n, x, y);
+      f.values[t * n + v] = float((x < front ? 2.0 : 1.0) + 0.2 * y);
+    }
+  }
+  return f;
+}
+
+/// Independent noise at every value: nothing for VQ to exploit.
+inline SyntheticField white_noise(std::uint64_t n, std::uint32_t steps, std::uint64_t seed = 5) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> g(0.f, 1.f);
+  for (std::uint32_t t = 0; t < steps; ++t) f.times[t] = t;
+  for (auto& x : f.values) x = g(rng);
+  return f;
+}
+
+}  // namespace penumbra::compression::testing
