@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "input_series.h"
+#include "store_replay.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
 #include "penumbra/vtk/unstructured_grid_adaptor.h"
@@ -138,6 +139,8 @@ public:
   ~Replay() { pnb_destroy(m_ctx); }
 
   int run() {
+    // A run's compressed history (config "store") replays without VTK readers.
+    if (is_store(m_opt.input)) return replay_store(m_opt.config, m_opt.input, m_opt.steps, m_opt.quiet, m_out, m_err);
     auto input = InputSeries::open(m_opt.input);
     const auto [first, last] = step_range(m_opt.steps, input->size());
     if (!m_opt.quiet) m_out << "penumbra-replay: " << input->describe() << ", replaying steps " << first << ".." << last - 1 << "\n";
@@ -265,6 +268,8 @@ std::string usage() {
          "  Replays a saved simulation through Penumbra's C API as if the solver were running.\n"
          "  CONFIG  Penumbra JSON config (file path or JSON text)\n"
          "  INPUT   .vtu | legacy .vtk | .pvd | ParaView .series JSON | Exodus II (.e .ex2 .exo)\n"
+         "          | a run's compressed history: a store directory (config \"store\") or one of its\n"
+         "            segment-NNN folders, re-rendered with CONFIG's cameras and transfer functions\n"
          "  --steps a:b  replay step indices a..b-1 (0-based, half-open; 'a:', ':b' and 'a' work too)\n"
          "  --quiet      print errors only\n"
          "  The mesh is published once (republished with a new topology_version only when points or\n"

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -284,19 +285,55 @@ double non_negative(const json& j, const std::string& path) {
 }
 
 LightingConfig parse_lighting(const json& j, const std::string& path) {
-  only_keys(j, path, {"model", "lights", "absorption", "scattering", "level0_resolution", "phong", "budget"});
+  only_keys(j, path,
+            {"model", "lights", "absorption", "scattering", "level0_resolution", "phong", "budget", "occlusion"});
   LightingConfig l;
   if (const json* m = find(j, "model")) {
-    const std::string s = choice(*m, child(path, "model"), {"none", "phong", "light-volume"});
+    const std::string s = choice(*m, child(path, "model"), {"none", "phong", "light-volume", "occlusion"});
     l.model = s == "none" ? render::LightingModel::none
                           : (s == "phong" ? render::LightingModel::phong : render::LightingModel::light_volume);
+    l.occlusion_model = s == "occlusion";
+  }
+  if (const json* o = find(j, "occlusion")) {
+    const std::string op = child(path, "occlusion");
+    only_keys(*o, op, {"aperture", "splits", "grid", "attenuation", "space", "volume_resolution", "shadows",
+                       "shadow_aperture", "shadow_splits"});
+    OcclusionConfig& oc = l.occlusion;
+    auto angle = [&](const char* key, double& out) {
+      if (const json* a = find(*o, key)) {
+        out = number(*a, child(op, key));
+        if (out <= 0 || out >= 90) fail(child(op, key), "must be in (0, 90) degrees");
+      }
+    };
+    auto splits = [&](const char* key, int& out) {
+      if (const json* n = find(*o, key)) {
+        out = static_cast<int>(integer(*n, child(op, key), 1, 7));
+        if (out != 1 && out != 3 && out != 7) fail(child(op, key), "must be 1, 3 or 7");
+      }
+    };
+    angle("aperture", oc.aperture_deg);
+    angle("shadow_aperture", oc.shadow_aperture_deg);
+    splits("splits", oc.splits);
+    splits("shadow_splits", oc.shadow_splits);
+    if (const json* g = find(*o, "grid")) oc.grid_resolution = static_cast<int>(integer(*g, child(op, "grid"), 4, 1024));
+    if (const json* a = find(*o, "attenuation")) {
+      oc.attenuation = number(*a, child(op, "attenuation"));
+      if (oc.attenuation <= 0) fail(child(op, "attenuation"), "must be > 0");
+    }
+    if (const json* sp = find(*o, "space")) oc.volume = choice(*sp, child(op, "space"), {"points", "volume"}) == "volume";
+    if (const json* r = find(*o, "volume_resolution"))
+      oc.volume_resolution = static_cast<int>(integer(*r, child(op, "volume_resolution"), 2, 1024));
+    if (const json* sh = find(*o, "shadows")) {
+      if (!sh->is_boolean()) fail(child(op, "shadows"), "must be true or false");
+      oc.shadows = sh->get<bool>();
+    }
   }
   if (const json* ls = find(j, "lights")) {
     const std::string lp = child(path, "lights");
     if (!ls->is_array()) fail(lp, "must be an array of lights");
     for (std::size_t i = 0; i < ls->size(); ++i) l.lights.push_back(parse_light((*ls)[i], item(lp, i)));
   }
-  if (l.model == render::LightingModel::light_volume && l.lights.empty())
+  if (l.model == render::LightingModel::light_volume && !l.occlusion_model && l.lights.empty())
     fail(child(path, "lights"), "needs at least one light for model \"light-volume\"");
   if (const json* a = find(j, "absorption")) l.absorption = non_negative(*a, child(path, "absorption"));
   if (const json* sc = find(j, "scattering")) {
@@ -334,8 +371,38 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
   return l;
 }
 
+StoreConfig parse_store(const json& j, const std::string& path) {
+  only_keys(j, path, {"directory", "every_cycles", "window", "codebook_size", "error_bound", "memory_budget_mb"});
+  StoreConfig s;
+  const json* dir = find(j, "directory");
+  if (!dir) fail(child(path, "directory"), "is required");
+  s.directory = string(*dir, child(path, "directory"));
+  if (s.directory.empty()) fail(child(path, "directory"), "must not be empty");
+  if (const json* n = find(j, "every_cycles"))
+    s.every_cycles = integer(*n, child(path, "every_cycles"), 1, std::numeric_limits<std::int64_t>::max());
+  if (const json* w = find(j, "window")) {
+    s.codec.window = static_cast<std::uint32_t>(integer(*w, child(path, "window"), 8, 1024));
+    if (s.codec.window % 8 != 0) fail(child(path, "window"), "must be a multiple of 8");
+  }
+  if (const json* c = find(j, "codebook_size"))
+    s.codec.codebook_size = static_cast<std::uint32_t>(integer(*c, child(path, "codebook_size"), 2, 256));
+  if (const json* b = find(j, "error_bound")) {
+    const std::string bp = child(path, "error_bound");
+    only_keys(*b, bp, {"absolute", "relative"});
+    if (b->size() != 1) fail(bp, "must have exactly one of \"absolute\" (data units) or \"relative\" (of the value range)");
+    const bool absolute = find(*b, "absolute") != nullptr;
+    const std::string vp = child(bp, absolute ? "absolute" : "relative");
+    s.codec.bound.kind = absolute ? compression::BoundKind::absolute : compression::BoundKind::range_relative;
+    s.codec.bound.value = number(*(absolute ? find(*b, "absolute") : find(*b, "relative")), vp);
+    if (!(s.codec.bound.value > 0)) fail(vp, "must be > 0");
+  }
+  if (const json* m = find(j, "memory_budget_mb"))
+    s.memory_budget_bytes = static_cast<std::uint64_t>(integer(*m, child(path, "memory_budget_mb"), 1, 1 << 24)) << 20;
+  return s;
+}
+
 Config parse_document(const json& j) {
-  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting"});
+  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -362,6 +429,7 @@ Config parse_document(const json& j) {
     c.cpu_fallback = c.backend == Backend::automatic;
   }
   if (const json* l = find(j, "lighting")) c.lighting = parse_lighting(*l, "lighting");
+  if (const json* st = find(j, "store")) c.store = parse_store(*st, "store");
   return c;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/compression/codec_params.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/vec3.h"
 #include "penumbra/render/light_volume.h"
@@ -59,8 +60,24 @@ struct TriggerConfig {
   double every_time = 0.0;        ///< 0 = not used
 };
 
+/// Cone-traced directional occlusion and shadows (insitu/README.md, "lighting.occlusion").
+struct OcclusionConfig {
+  double aperture_deg = 30.0;  ///< occlusion cones towards the viewer
+  int splits = 3;              ///< 1, 3 or 7
+  int grid_resolution = 128;   ///< extinction grid nodes along the longest side
+  double attenuation = 1.0;    ///< global alpha
+  bool volume = false;         ///< false: evaluated at every mesh point; true: a pre-illumination grid
+  int volume_resolution = 64;
+  bool shadows = true;         ///< narrow cones towards each light
+  double shadow_aperture_deg = 2.0;
+  int shadow_splits = 1;
+};
+
 /// How rendered samples are lit (insitu/README.md, "lighting").
 struct LightingConfig {
+  /// "occlusion" maps to LightingModel::light_volume with the light field from cone tracing.
+  bool occlusion_model = false;
+  OcclusionConfig occlusion;
   render::LightingModel model = render::LightingModel::none;
   /// Light sources: the light volume's, and the first directional one is Phong's key light
   /// (none: a headlight).
@@ -71,6 +88,14 @@ struct LightingConfig {
   double ambient = 0.35, diffuse = 0.55, specular = 0.25, shininess = 24.0;
   /// Light-volume work per rendered step (the light converges over steps when it runs out).
   render::LightBudget budget;
+};
+
+/// The run's compressed field history (insitu/README.md, "store").
+struct StoreConfig {
+  std::string directory;
+  std::int64_t every_cycles = 1;  ///< record the rendered fields at every Nth cycle
+  compression::CodecParams codec;
+  std::uint64_t memory_budget_bytes = 0;  ///< 0: what two windows of every field need
 };
 
 /// The whole configuration. See insitu/README.md for the JSON schema.
@@ -87,6 +112,7 @@ struct Config {
   Backend backend = Backend::cpu;
   /// Present when the config has a "lighting" object: the database then gets a lighting column.
   std::optional<LightingConfig> lighting;
+  std::optional<StoreConfig> store;
   /// Set for "auto": a mesh the GPU cannot hold (device memory) is rendered on the CPU instead.
   bool cpu_fallback = false;
 

@@ -11,6 +11,8 @@
 #include <map>
 #include <mutex>
 
+#include "field_store.h"
+#include "occlusion_lighting.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/camera.h"
 #include "penumbra/render/cpu_ray_caster.h"
@@ -36,8 +38,9 @@ std::vector<std::string> database_parameters(const Config& c) {
 }
 
 /// The `lighting` column's value.
-std::string lighting_label(render::LightingModel m) {
-  switch (m) {
+std::string lighting_label(const LightingConfig& l) {
+  if (l.occlusion_model) return "occlusion";
+  switch (l.model) {
     case render::LightingModel::none: return "none";
     case render::LightingModel::phong: return "phong";
     case render::LightingModel::light_volume: return "light-volume";
@@ -188,6 +191,8 @@ struct Context::PreparedMesh {
   /// Per config field entry, its light volume (model light-volume), made at the first step and
   /// kept across steps so that each step's light starts from the previous one.
   std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
+  /// Likewise for lighting model "occlusion".
+  std::vector<std::unique_ptr<OcclusionLighting>> occlusions;
 };
 
 Context::Context(Config config)
@@ -198,7 +203,7 @@ Context::Context(Config config)
     // Shading runs in the CPU ray caster only so far.
     if (m_config.backend == Backend::gpu)
       throw Error(ErrorCode::backend_unavailable,
-                  "config: lighting model \"" + lighting_label(m_config.lighting->model) +
+                  "config: lighting model \"" + lighting_label(*m_config.lighting) +
                       "\" is rendered by the CPU backend only; use backend \"cpu\" or \"auto\", or lighting model \"none\"");
     if (m_config.backend == Backend::automatic) {
       log_line("backend \"auto\": lighting is rendered on the CPU");
@@ -208,6 +213,7 @@ Context::Context(Config config)
   m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);
+  if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store);
 }
 
 Context::~Context() = default;
@@ -283,6 +289,7 @@ void Context::publish_mesh(const MeshView& mesh) {
   }
   m_mesh = std::move(p);
   ++m_preparations;
+  if (m_store) m_store->begin_segment(m_mesh->view);
   // Fields were sized for the old mesh.
   m_fields.clear();
 }
@@ -338,7 +345,14 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
   if (lit(m_config)) {
     const LightingConfig& l = *m_config.lighting;
     const std::vector<float>* light_rgb = nullptr;
-    if (l.model == render::LightingModel::light_volume) {
+    if (l.occlusion_model) {
+      auto& occ = m_mesh->occlusions;
+      if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
+      if (!occ[index]) occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, l.occlusion, l.lights);
+      const auto t0 = Clock::now();
+      occ[index]->set_field(scalars, tf);
+      m_last_step.light_ms += ms_since(t0);
+    } else if (l.model == render::LightingModel::light_volume) {
       auto& volumes = m_mesh->light_volumes;
       if (volumes.size() < m_config.fields.size()) volumes.resize(m_config.fields.size());
       auto& lv = volumes[index];
@@ -362,6 +376,12 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
   char cycle_text[32];
   std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
   for (const CameraEntry& cam : m_mesh->cameras) {
+    if (lit(m_config) && m_config.lighting->occlusion_model) {
+      // Occlusion looks towards the viewer: one light field per camera.
+      const auto t_occ = Clock::now();
+      options.shading.light_rgb = &m_mesh->occlusions[index]->light_rgb(cam.camera.eye);
+      m_last_step.light_ms += ms_since(t_occ);
+    }
     const auto t0 = Clock::now();
     const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera)
                                                    : m_mesh->caster->render(scalars, tf, cam.camera, options);
@@ -372,7 +392,7 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
     row.values = {format_number(time), cam.phi, cam.theta};
     if (with_camera_column) row.values.push_back(cam.name);
     row.values.push_back(m_field_labels[index]);
-    if (m_config.lighting) row.values.push_back(lighting_label(m_config.lighting->model));
+    if (m_config.lighting) row.values.push_back(lighting_label(*m_config.lighting));
     row.file = rel;
     rows.push_back(std::move(row));
   }
@@ -386,15 +406,20 @@ bool Context::execute(double time, std::int64_t cycle) {
     Context* c;
     ~DropBorrowed() { c->drop_borrowed_fields(); }
   } drop{this};
-  if (!m_trigger.fires(time, cycle)) return false;
+  std::string failures;
+  ErrorCode first_code = ErrorCode::ok;
+  // The history is kept on its own cadence, whether or not this step renders.
+  if (m_store && m_store->records(cycle)) store_fields(time, cycle, failures, first_code);
+  if (!m_trigger.fires(time, cycle)) {
+    if (first_code != ErrorCode::ok) throw Error(first_code, failures);
+    return false;
+  }
 
   const auto t0 = Clock::now();
   std::vector<CinemaDatabase::Row> rows;
   double render_ms = 0;
   m_last_step.light = {};
   m_last_step.light_ms = 0;
-  std::string failures;
-  ErrorCode first_code = ErrorCode::ok;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     try {
       render_field(i, time, cycle, rows, render_ms);
@@ -414,10 +439,26 @@ bool Context::execute(double time, std::int64_t cycle) {
   return true;
 }
 
+void Context::store_fields(double time, std::int64_t cycle, std::string& failures, ErrorCode& first_code) {
+  for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
+    const FieldConfig& f = m_config.fields[i];
+    auto it = m_fields.find(f.name);
+    if (it == m_fields.end()) continue;  // reported by the render step when it renders
+    try {
+      m_store->record(m_field_labels[i], time, cycle, point_scalars(m_mesh->view, it->second.view, f.mode, f.component));
+    } catch (const Error& e) {
+      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
+      if (first_code == ErrorCode::ok) first_code = e.code();
+    }
+  }
+}
+
 void Context::finalize() {
-  // Every step is committed when execute() returns, so there is nothing left to flush.
+  // Every rendered step is committed when execute() returns; the store still holds its last,
+  // partial window.
   m_finalized = true;
   m_fields.clear();
+  if (m_store) m_store->finish();
 }
 
 }  // namespace penumbra::insitu

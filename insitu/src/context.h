@@ -8,6 +8,7 @@
 
 #include "cinema_database.h"
 #include "config.h"
+#include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/mesh_view.h"
 #include "penumbra/render/light_volume.h"
@@ -19,6 +20,8 @@ class CpuRayCaster;
 }  // namespace penumbra::render
 
 namespace penumbra::insitu {
+
+class FieldStore;
 
 /// What the last rendering step did, for diagnostics and examples.
 struct StepStats {
@@ -85,10 +88,12 @@ private:
   void render_field(std::size_t index, double time, std::int64_t cycle, std::vector<CinemaDatabase::Row>& rows,
                     double& render_ms);
   void drop_borrowed_fields();
+  void store_fields(double time, std::int64_t cycle, std::string& failures, ErrorCode& first_code);
 
   Config m_config;
   Trigger m_trigger;
   std::unique_ptr<CinemaDatabase> m_database;
+  std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
   std::unique_ptr<PreparedMesh> m_mesh;
   std::map<std::string, HeldField> m_fields;
   std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry

@@ -125,6 +125,41 @@ TEST(LightingConfig, LitStepsWriteALightingColumnAndShadowedImages) {
   EXPECT_GT(b_lit, 0.05 * b_plain);
 }
 
+TEST(LightingConfig, OcclusionModelIsReadAndChecked) {
+  const Config c = parse_config(with_lighting("/tmp/unused", R"({"model": "occlusion",
+      "occlusion": {"aperture": 20, "splits": 7, "grid": 32, "space": "volume", "volume_resolution": 16,
+                    "shadows": false, "attenuation": 0.8}})"));
+  ASSERT_TRUE(c.lighting->occlusion_model);
+  const OcclusionConfig& o = c.lighting->occlusion;
+  EXPECT_EQ(o.aperture_deg, 20);
+  EXPECT_EQ(o.splits, 7);
+  EXPECT_EQ(o.grid_resolution, 32);
+  EXPECT_TRUE(o.volume);
+  EXPECT_EQ(o.volume_resolution, 16);
+  EXPECT_FALSE(o.shadows);
+  EXPECT_EQ(o.attenuation, 0.8);
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"splits": 5}})", "lighting.occlusion.splits must be 1, 3 or 7");
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"aperture": 90}})", "lighting.occlusion.aperture must be in (0, 90)");
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"space": "image"}})", "lighting.occlusion.space must be one of");
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"shadows": 1}})", "lighting.occlusion.shadows must be true or false");
+}
+
+TEST(LightingConfig, OcclusionStepsAreDarkerWhereTheVolumeHidesTheViewer) {
+  TempDir tmp;
+  const auto plain = run_step(tmp / "plain", R"({"model": "none"})");
+  for (const char* space : {"points", "volume"}) {
+    const std::string dir = tmp / (std::string("occ-") + space);
+    const auto occ = run_step(dir, std::string(R"({"model": "occlusion", "phong": {"ambient": 1, "diffuse": 0, "specular": 0},
+        "lights": [{"type": "directional", "direction": [1, 0, 0]}],
+        "occlusion": {"grid": 16, "splits": 3, "space": ")") + space + R"(", "volume_resolution": 12}})");
+    ASSERT_EQ(occ.size(), 2u) << space;
+    EXPECT_EQ(occ[1][4], "occlusion");
+    const double b_plain = mean_brightness(tmp / "plain", plain[1]), b_occ = mean_brightness(dir, occ[1]);
+    EXPECT_LT(b_occ, 0.95 * b_plain) << space;
+    EXPECT_GT(b_occ, 0.05 * b_plain) << space;
+  }
+}
+
 TEST(LightingConfig, GpuBackendRefusesLightingAndAutoRendersItOnTheCpu) {
   TempDir tmp;
   try {

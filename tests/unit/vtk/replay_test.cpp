@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "penumbra/render/image.h"
 #include "replay.h"
 #include "vtk_test_util.h"
 
@@ -179,6 +180,47 @@ TEST(Replay, BadArgumentsAndInputsFailCleanly) {
   const Result bad_config = replay_run({"{\"output\":{}}", post});
   EXPECT_EQ(bad_config.rc, 1);
   EXPECT_NE(bad_config.err.find("config"), std::string::npos) << bad_config.err;
+}
+
+}  // namespace
+}  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// A run keeps its history (config "store"); penumbra-replay renders it again from the store with
+// another config, as after the run: same steps, times and cycles, pictures within the bound.
+TEST(ReplayStore, RerendersTheCompressedHistoryWithANewConfig) {
+  test::TempDir tmp("store");
+  const fs::path db1 = tmp.path() / "db1", db2 = tmp.path() / "db2", store = tmp.path() / "store";
+  std::string with_store = config(db1, "diffused");
+  with_store.pop_back();
+  with_store += R"(,"store":{"directory":")" + store.string() + R"(","window":8,"error_bound":{"relative":0.001}}})";
+  const Result first = replay_run({with_store, (test::data_dir() / "mug.e").string(), "--quiet"});
+  ASSERT_EQ(first.rc, 0) << first.err;
+  ASSERT_TRUE(fs::exists(store / "segment-000" / "diffused.pnbf"));
+
+  const Result again = replay_run({config(db2, "diffused"), store.string()});
+  ASSERT_EQ(again.rc, 0) << again.err;
+  EXPECT_NE(again.out.find("21 step(s), 0 failure(s)"), std::string::npos) << again.out;
+  const auto rows1 = read_lines(db1 / "data.csv"), rows2 = read_lines(db2 / "data.csv");
+  ASSERT_EQ(rows2.size(), 22u);
+  ASSERT_EQ(rows1.size(), rows2.size());
+  for (std::size_t i = 0; i < rows1.size(); ++i) EXPECT_EQ(rows1[i], rows2[i]) << "same times, cycles and files";
+  // The field comes back within 0.1 % of its range at every value: the same picture up to a
+  // few 8-bit steps where colour or opacity change fastest.
+  const std::string file = rows1[12].substr(rows1[12].rfind(',') + 1);
+  int w1 = 0, h1 = 0, w2 = 0, h2 = 0;
+  const auto a = render::read_png_rgb((db1 / file).string(), w1, h1);
+  const auto b = render::read_png_rgb((db2 / file).string(), w2, h2);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_LT(render::rms_difference_pct(a, b), 0.5);
+
+  // A store that is not one is refused clearly.
+  fs::create_directories(tmp.path() / "empty" / "segment-000");
+  const Result bad = replay_run({config(tmp.path() / "db3", "diffused"), (tmp.path() / "empty").string()});
+  EXPECT_EQ(bad.rc, 1);
+  EXPECT_NE(bad.err.find("mesh.pnbm"), std::string::npos) << bad.err;
 }
 
 }  // namespace

@@ -1,0 +1,127 @@
+// insitu/src/field_store.cpp -- segments, per-field streaming encoders and the step list
+#include "field_store.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "penumbra/core/error.h"
+#include "stored_mesh.h"
+
+namespace penumbra::insitu {
+namespace {
+
+// A field name as a file name: anything but letters, digits, '-', '_' and '.' becomes '_'
+// (the field's real name is kept in its file's header).
+std::string file_stem(const std::string& name) {
+  std::string s = name;
+  for (char& c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
+  return s.empty() || s[0] == '.' ? "_" + s : s;
+}
+
+}  // namespace
+
+FieldStore::FieldStore(StoreConfig config) : m_config(std::move(config)) {
+  std::error_code ec;
+  std::filesystem::create_directories(m_config.directory, ec);
+  if (ec || !std::filesystem::is_directory(m_config.directory))
+    throw Error(ErrorCode::io_error, "store: cannot create directory '" + m_config.directory + "'" +
+                                         (ec ? ": " + ec.message() : std::string()));
+  // A new run never mixes its segments with an earlier run's: continue numbering after them.
+  for (const auto& e : std::filesystem::directory_iterator(m_config.directory, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind("segment-", 0) == 0) m_segment = std::max(m_segment, std::atoi(n.c_str() + 8));
+  }
+}
+
+FieldStore::~FieldStore() {
+  try {
+    finish();
+  } catch (...) {
+    // Destruction must not throw; the .partial files keep every finished window.
+  }
+}
+
+bool FieldStore::records(std::int64_t cycle) const { return cycle % m_config.every_cycles == 0; }
+
+void FieldStore::begin_segment(const MeshView& mesh) {
+  finish();
+  m_encoders.clear();
+  m_steps.clear();
+  ++m_segment;
+  char name[32];
+  std::snprintf(name, sizeof name, "segment-%03d", m_segment);
+  m_segment_dir = m_config.directory + "/" + name;
+  std::error_code ec;
+  std::filesystem::create_directories(m_segment_dir, ec);
+  if (ec) throw Error(ErrorCode::io_error, "store: cannot create '" + m_segment_dir + "': " + ec.message());
+  m_point_count = mesh.point_count();
+  write_stored_mesh(m_segment_dir + "/mesh.pnbm", copy_mesh(mesh));
+  write_steps();
+}
+
+void FieldStore::record(const std::string& field, double time, std::int64_t cycle, const std::vector<float>& values) {
+  if (m_segment_dir.empty()) throw Error(ErrorCode::invalid_operation, "store: no mesh published yet");
+  require(values.size() == m_point_count, "store: field '" + field + "' has " + std::to_string(values.size()) +
+                                              " values for " + std::to_string(m_point_count) + " points");
+  auto& enc = m_encoders[field];
+  if (!enc) {
+    compression::StreamingOptions o;
+    o.path = m_segment_dir + "/" + file_stem(field) + ".pnbf";
+    o.field_name = field;
+    o.vertex_count = m_point_count;
+    o.codec = m_config.codec;
+    o.memory_budget_bytes = m_config.memory_budget_bytes;
+    try {
+      enc = std::make_unique<compression::StreamingEncoder>(o);
+    } catch (...) {
+      m_encoders.erase(field);
+      throw;
+    }
+  }
+  try {
+    enc->push(time, values.data());
+  } catch (const Error& e) {
+    throw Error(e.code(), "store: field '" + field + "' at cycle " + std::to_string(cycle) + ": " + e.what());
+  }
+  if (m_steps.empty() || m_steps.back().first != cycle) {
+    m_steps.emplace_back(cycle, time);
+    write_steps();
+  }
+}
+
+void FieldStore::write_steps() {
+  // Rewritten whole and renamed into place: a reader never sees a half-written list.
+  const std::string path = m_segment_dir + "/steps.csv", tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << "cycle,time\n";
+    char line[64];
+    for (const auto& [cycle, time] : m_steps) {
+      std::snprintf(line, sizeof line, "%lld,%.17g\n", static_cast<long long>(cycle), time);
+      out << line;
+    }
+    out.flush();
+    if (!out) throw Error(ErrorCode::io_error, "store: cannot write '" + tmp + "' (disk full?)");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(ErrorCode::io_error, "store: cannot rename '" + tmp + "': " + ec.message());
+}
+
+void FieldStore::finish() {
+  std::string failures;
+  for (auto& [name, enc] : m_encoders) {
+    try {
+      enc->finish();
+    } catch (const Error& e) {
+      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
+    }
+  }
+  if (!failures.empty()) throw Error(ErrorCode::io_error, "store: " + failures);
+}
+
+}  // namespace penumbra::insitu

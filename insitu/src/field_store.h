@@ -1,0 +1,50 @@
+// insitu/src/field_store.h -- the run's compressed field history (config "store")
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "config.h"
+#include "penumbra/compression/streaming_encoder.h"
+#include "penumbra/core/mesh_view.h"
+
+namespace penumbra::insitu {
+
+/// Keeps every recorded step of the rendered fields, compressed (compression::StreamingEncoder:
+/// a window is trained and written on a background thread while the solver goes on). The store
+/// directory holds one `segment-NNN` folder per mesh topology, each with `mesh.pnbm`, one
+/// `<field>.pnbf` per field (`.partial` until finish) and `steps.csv` (cycle, time). A run that
+/// dies leaves every finished window readable (insitu::StoredRun).
+class FieldStore {
+public:
+  /// Creates the store directory; throws Error(io_error) when it cannot be created.
+  explicit FieldStore(StoreConfig config);
+  /// Finishes the files; errors are swallowed here (call finish() to see them).
+  ~FieldStore();
+  FieldStore(const FieldStore&) = delete;
+  FieldStore& operator=(const FieldStore&) = delete;
+
+  /// Closes the current segment and starts the next one for `mesh`.
+  void begin_segment(const MeshView& mesh);
+  /// Whether `cycle` is a recorded step (every_cycles).
+  bool records(std::int64_t cycle) const;
+  /// Adds one step of `field` (one value per mesh point). Throws Error naming the field and the
+  /// point for NaN/Inf values: that step of that field is then not stored.
+  void record(const std::string& field, double time, std::int64_t cycle, const std::vector<float>& values);
+  /// Completes every file of the current segment. Idempotent.
+  void finish();
+
+private:
+  void write_steps();
+  StoreConfig m_config;
+  int m_segment = -1;
+  std::string m_segment_dir;
+  std::uint64_t m_point_count = 0;
+  std::map<std::string, std::unique_ptr<compression::StreamingEncoder>> m_encoders;
+  std::vector<std::pair<std::int64_t, double>> m_steps;
+};
+
+}  // namespace penumbra::insitu

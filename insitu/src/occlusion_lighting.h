@@ -1,0 +1,35 @@
+// insitu/src/occlusion_lighting.h -- the light field of lighting model "occlusion": directional
+// ambient occlusion towards the camera times cone-traced shadows from the lights
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "config.h"
+#include "penumbra/render/occlusion.h"
+#include "penumbra/render/tet_mesh.h"
+
+namespace penumbra::insitu {
+
+/// Per field: the extinction pyramid of the current step (rebuilt by set_field) and, per camera,
+/// L(x) = AO(x, eye) x sum_k colour_k shadow_k(x) at every mesh point (AO alone without lights or
+/// with shadows off), for the ray caster's light-field shading.
+class OcclusionLighting {
+public:
+  OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh, const OcclusionConfig& config,
+                    std::vector<render::Light> lights);
+  /// Resamples extinction through `tf`, rebuilds the pyramid and the shadow factors.
+  void set_field(const std::vector<float>& scalars, const render::TransferFunction& tf);
+  /// The light field (3 floats per point) seen from `eye`.
+  const std::vector<float>& light_rgb(const Vec3d& eye);
+
+private:
+  std::shared_ptr<const render::TetMesh> m_mesh;
+  OcclusionConfig m_config;
+  std::vector<render::Light> m_lights;
+  render::ExtinctionResampler m_resampler;
+  render::ExtinctionPyramid m_pyramid;
+  std::vector<float> m_shadow_rgb;  ///< sum_k colour_k shadow_k per point, 3 per point; empty: white
+  std::vector<float> m_rgb;
+};
+
+}  // namespace penumbra::insitu

@@ -1,0 +1,103 @@
+// insitu/src/stored_run.cpp -- a store segment opened for re-rendering
+#include "penumbra/insitu/stored_run.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "penumbra/compression/field_file.h"
+#include "penumbra/compression/pager.h"
+#include "penumbra/core/error.h"
+#include "stored_mesh.h"
+
+namespace penumbra::insitu {
+
+struct StoredRun::Impl {
+  StoredMesh mesh;
+  MeshView view;
+  std::vector<std::string> names;
+  struct Field {
+    std::shared_ptr<compression::CompressedField> file;
+    std::unique_ptr<compression::Pager> pager;
+  };
+  std::map<std::string, Field> fields;
+  std::vector<std::pair<std::int64_t, double>> steps;
+};
+
+StoredRun::StoredRun() : m_impl(std::make_unique<Impl>()) {}
+StoredRun::~StoredRun() = default;
+
+std::unique_ptr<StoredRun> StoredRun::open(const std::string& dir) {
+  std::unique_ptr<StoredRun> run(new StoredRun());
+  Impl& im = *run->m_impl;
+  if (!std::filesystem::is_directory(dir))
+    throw Error(ErrorCode::io_error, "stored run '" + dir + "' is not a directory (expected a store's segment-NNN)");
+  im.mesh = read_stored_mesh(dir + "/mesh.pnbm");
+  im.view = im.mesh.view();
+  {
+    std::ifstream in(dir + "/steps.csv");
+    if (!in) throw Error(ErrorCode::io_error, "stored run '" + dir + "': steps.csv is missing");
+    std::string line;
+    std::getline(in, line);
+    for (int row = 2; std::getline(in, line); ++row) {
+      long long cycle = 0;
+      double time = 0;
+      char comma = 0;
+      std::istringstream ls(line);
+      if (!(ls >> cycle >> comma >> time) || comma != ',' || !std::isfinite(time))
+        throw Error(ErrorCode::io_error, "stored run '" + dir + "': steps.csv line " + std::to_string(row) +
+                                             " is not 'cycle,time'");
+      im.steps.emplace_back(cycle, time);
+    }
+  }
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    const bool partial = name.size() > 13 && name.compare(name.size() - 13, 13, ".pnbf.partial") == 0;
+    const bool whole = name.size() > 5 && name.compare(name.size() - 5, 5, ".pnbf") == 0;
+    if (!partial && !whole) continue;
+    compression::OpenOptions oo;
+    oo.recover_incomplete = partial;  // a run that died: its finished windows
+    auto file = compression::CompressedField::open(e.path().string(), oo);
+    if (file->info().vertex_count != im.view.point_count())
+      throw Error(ErrorCode::io_error, "stored run '" + dir + "': '" + name + "' has " +
+                                           std::to_string(file->info().vertex_count) + " values per step, the mesh " +
+                                           std::to_string(im.view.point_count()) + " points");
+    Impl::Field f;
+    f.file = file;
+    f.pager = std::make_unique<compression::Pager>(file);
+    im.names.push_back(file->info().name);
+    im.fields[file->info().name] = std::move(f);
+  }
+  std::sort(im.names.begin(), im.names.end());
+  // Steps every field can give (a run that died keeps only whole windows).
+  std::size_t usable = im.steps.size();
+  for (const auto& [name, f] : im.fields) usable = std::min<std::size_t>(usable, f.file->step_count());
+  im.steps.resize(usable);
+  return run;
+}
+
+const MeshView& StoredRun::mesh() const { return m_impl->view; }
+const std::vector<std::string>& StoredRun::fields() const { return m_impl->names; }
+std::size_t StoredRun::step_count() const { return m_impl->steps.size(); }
+double StoredRun::time(std::size_t step) const { return m_impl->steps.at(step).second; }
+std::int64_t StoredRun::cycle(std::size_t step) const { return m_impl->steps.at(step).first; }
+
+void StoredRun::read(const std::string& field, std::size_t step, std::vector<float>& out) {
+  auto it = m_impl->fields.find(field);
+  if (it == m_impl->fields.end()) throw Error(ErrorCode::invalid_argument, "stored run: no field '" + field + "'");
+  require(step < step_count(), "stored run: step " + std::to_string(step) + " is beyond the " +
+                                   std::to_string(step_count()) + " stored steps");
+  // The field's own step at this time: a step whose values were refused (NaN) is missing there.
+  const auto& times = it->second.file->times();
+  const double t = time(step);
+  const auto pos = std::find(times.begin(), times.end(), t);
+  if (pos == times.end())
+    throw Error(ErrorCode::invalid_argument, "stored run: field '" + field + "' has no values at time " + std::to_string(t));
+  out.resize(m_impl->view.point_count());
+  it->second.pager->read_step(static_cast<std::uint64_t>(pos - times.begin()), out.data());
+}
+
+}  // namespace penumbra::insitu
