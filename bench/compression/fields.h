@@ -1,0 +1,32 @@
+// bench/compression/fields.h -- the time-varying fields the compression benchmark runs on.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pnb_bench {
+
+/// values[t * vertices + v] (step-major, as a solver hands steps over).
+struct Field {
+  std::string name;
+  std::uint64_t vertices = 0;
+  std::uint32_t steps = 0;
+  std::vector<double> times;
+  std::vector<float> values;
+  double range() const;
+};
+
+/// Synthetic fields on `vertices` points in the unit cube, ordered along a Morton curve (so
+/// neighbouring indices are neighbours in space, as in a solver's mesh numbering):
+///   smooth  six Gaussian blobs advected across the domain, amplitudes breathing slowly
+///   shock   a blast-like planar front crossing the domain: a jump of uniform strength that
+///           weakens as it travels, exponential relaxation behind, a smooth state ahead
+///   shock-nonuniform  a planar front whose jump varies along it (0.5 to 1.5): harder for VQ
+///   eeg     eight oscillating sources (8-13 steps per period) with spatial fall-off plus
+///           white noise at 30% of the signal: an EEG-like, low-SNR field
+Field synthetic_field(const std::string& kind, std::uint64_t vertices, std::uint32_t steps);
+
+/// A field exported by export_mug.py (uint64 vertices, uint64 steps, f64 times, f32 values).
+Field load_raw_field(const std::string& path, const std::string& name);
+
+}  // namespace pnb_bench
