@@ -21,32 +21,12 @@
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "scene_views.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
 
 namespace {
-
-penumbra::MeshView mesh_view(const pb::Scene& scene) {
-  static const std::uint8_t tetra = 10;
-  penumbra::MeshView view;
-  view.points = {reinterpret_cast<const std::byte*>(scene.points.data()), scene.point_count(), 3 * sizeof(double)};
-  view.point_type = penumbra::ScalarType::float64;
-  view.connectivity = {scene.tets.data(), scene.tets.size(), penumbra::ScalarType::int64};
-  view.cell_types = &tetra;
-  view.cell_type_count = 1;
-  view.topology_version = 1;
-  return view;
-}
-
-pr::TransferFunction transfer_function(const pb::Scene& scene) {
-  pr::TransferFunction tf;
-  for (const pb::TfNode& n : scene.tf) {
-    tf.colors.push_back({n.x, n.r, n.g, n.b});
-    tf.opacities.push_back({n.x, n.extinction});
-  }
-  return tf;
-}
 
 // Median frame time of `frames` renders after one warm-up; `last` receives the last image.
 template <class Render>
@@ -83,7 +63,7 @@ int run(int argc, char** argv) {
   const std::string tag = scene.name + (size.empty() ? "" : "-" + size);
 
   pb::Stopwatch prepare_clock;
-  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(mesh_view(scene), "bench"));
+  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(pb::mesh_view(scene), "bench"));
   const double mesh_ms = prepare_clock.ms();
   pb::Stopwatch cpu_clock;
   const pr::CpuRayCaster cpu(mesh);
@@ -99,9 +79,8 @@ int run(int argc, char** argv) {
   pr::GpuRayCaster gpu(device, mesh);
   const double upload_ms = upload_clock.ms();
 
-  const pr::TransferFunction tf = transfer_function(scene);
-  const pr::Camera cam = pr::Camera::look_at(scene.camera.eye, scene.camera.target, scene.camera.up,
-                                             scene.camera.fov_y_deg, scene.width, scene.height);
+  const pr::TransferFunction tf = pb::transfer_function(scene);
+  const pr::Camera cam = pb::camera(scene);
 
   const std::string ref_path = pb::reference_path(scene, data_dir);
   std::vector<unsigned char> reference;

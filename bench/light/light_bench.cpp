@@ -38,32 +38,12 @@
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
 #include "scene.h"
+#include "scene_views.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
 
 namespace {
-
-penumbra::MeshView mesh_view(const pb::Scene& scene) {
-  static const std::uint8_t tetra = 10;
-  penumbra::MeshView view;
-  view.points = {reinterpret_cast<const std::byte*>(scene.points.data()), scene.point_count(), 3 * sizeof(double)};
-  view.point_type = penumbra::ScalarType::float64;
-  view.connectivity = {scene.tets.data(), scene.tets.size(), penumbra::ScalarType::int64};
-  view.cell_types = &tetra;
-  view.cell_type_count = 1;
-  view.topology_version = 1;
-  return view;
-}
-
-pr::TransferFunction transfer_function(const pb::Scene& scene) {
-  pr::TransferFunction tf;
-  for (const pb::TfNode& n : scene.tf) {
-    tf.colors.push_back({n.x, n.r, n.g, n.b});
-    tf.opacities.push_back({n.x, n.extinction});
-  }
-  return tf;
-}
 
 // Process CPU time over all threads: on a shared machine it shows the work apart from waiting.
 double cpu_ms() { return 1000.0 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
@@ -127,8 +107,8 @@ int run(int argc, char** argv) {
   penumbra::require(!data_dir.empty(), "pnb_bench_light: --data-dir DIR is required");
 
   const pb::Scene scene = pb::load_scene(name, data_dir);
-  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(mesh_view(scene), "bench"));
-  const pr::TransferFunction tf = transfer_function(scene);
+  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(pb::mesh_view(scene), "bench"));
+  const pr::TransferFunction tf = pb::transfer_function(scene);
   const std::vector<float>& scalars = scene.scalars;
   const pr::Light light{pr::Light::Kind::directional, {0.8, -0.45, -0.4}, {1, 1, 1}};
 
@@ -172,8 +152,7 @@ int run(int argc, char** argv) {
   // Image error: light-only shading (ambient 1), the same camera as the render benchmark.
   const int image_size = std::stoi(pb::option(argc, argv, "image-size", "256"));
   const pr::CpuRayCaster caster(mesh);
-  const pb::SceneCamera& sc = scene.camera;
-  const pr::Camera image_cam = pr::Camera::look_at(sc.eye, sc.target, sc.up, sc.fov_y_deg, image_size, image_size);
+  const pr::Camera image_cam = pb::camera(scene, image_size, image_size);
   auto shaded_rgb = [&](const std::vector<float>& light_rgb) {
     pr::RenderOptions ro;
     ro.shading.model = pr::LightingModel::light_volume;
@@ -314,8 +293,7 @@ int run(int argc, char** argv) {
   // Per-frame budget: 10 % of one CPU render frame, after a field change (in-situ time step).
   {
     const pr::CpuRayCaster caster(mesh);
-    const pb::SceneCamera& c = scene.camera;
-    const pr::Camera cam = pr::Camera::look_at(c.eye, c.target, c.up, c.fov_y_deg, scene.width, scene.height);
+    const pr::Camera cam = pb::camera(scene);
     pb::Stopwatch render_clock;
     (void)caster.render(scalars, tf, cam);
     const double frame_ms = render_clock.ms();

@@ -38,6 +38,7 @@
 #include "penumbra/render/light_volume.h"
 #include "penumbra/render/occlusion.h"
 #include "scene.h"
+#include "scene_views.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
@@ -113,23 +114,12 @@ Setup hexblock(int n, int width, int height, bool plate) {
 
 Setup bench_scene(const std::string& name, const std::string& data_dir, int width, int height) {
   const pb::Scene sc = pb::load_scene(name, data_dir);
-  static const std::uint8_t tetra = 10;
-  penumbra::MeshView view;
-  view.points = {reinterpret_cast<const std::byte*>(sc.points.data()), sc.point_count(), 3 * sizeof(double)};
-  view.point_type = penumbra::ScalarType::float64;
-  view.connectivity = {sc.tets.data(), sc.tets.size(), penumbra::ScalarType::int64};
-  view.cell_types = &tetra;
-  view.cell_type_count = 1;
-  view.topology_version = 1;
   Setup s;
   s.name = sc.name;
-  s.mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(view, "bench"));
+  s.mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(pb::mesh_view(sc), "bench"));
   s.scalars = sc.scalars;
-  for (const pb::TfNode& n : sc.tf) {
-    s.tf.colors.push_back({n.x, n.r, n.g, n.b});
-    s.tf.opacities.push_back({n.x, n.extinction});
-  }
-  s.camera = pr::Camera::look_at(sc.camera.eye, sc.camera.target, sc.camera.up, sc.camera.fov_y_deg, width, height);
+  s.tf = pb::transfer_function(sc);
+  s.camera = pb::camera(sc, width, height);
   std::copy(sc.background, sc.background + 3, s.background);
   return s;
 }

@@ -18,37 +18,12 @@
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "scene_views.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
 
 namespace {
-
-penumbra::MeshView mesh_view(const pb::Scene& scene) {
-  static const std::uint8_t tetra = 10;
-  penumbra::MeshView view;
-  view.points = {reinterpret_cast<const std::byte*>(scene.points.data()), scene.point_count(), 3 * sizeof(double)};
-  view.point_type = penumbra::ScalarType::float64;
-  view.connectivity = {scene.tets.data(), scene.tets.size(), penumbra::ScalarType::int64};
-  view.cell_types = &tetra;
-  view.cell_type_count = 1;
-  view.topology_version = 1;
-  return view;
-}
-
-pr::TransferFunction transfer_function(const pb::Scene& scene) {
-  pr::TransferFunction tf;
-  for (const pb::TfNode& n : scene.tf) {
-    tf.colors.push_back({n.x, n.r, n.g, n.b});
-    tf.opacities.push_back({n.x, n.extinction});
-  }
-  return tf;
-}
-
-pr::Camera camera(const pb::Scene& scene) {
-  const pb::SceneCamera& c = scene.camera;
-  return pr::Camera::look_at(c.eye, c.target, c.up, c.fov_y_deg, scene.width, scene.height);
-}
 
 int run(int argc, char** argv) {
   const std::string name = pb::option(argc, argv, "scene", "");
@@ -66,12 +41,12 @@ int run(int argc, char** argv) {
   // Mesh preparation and acceleration structures are built once per topology in a run, so
   // they are reported apart from the per-frame time.
   pb::Stopwatch prepare_clock;
-  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(mesh_view(scene), "bench"));
+  auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(pb::mesh_view(scene), "bench"));
   const pr::CpuRayCaster caster(mesh);
   const double prepare_ms = prepare_clock.ms();
 
-  const pr::TransferFunction tf = transfer_function(scene);
-  const pr::Camera cam = camera(scene);
+  const pr::TransferFunction tf = pb::transfer_function(scene);
+  const pr::Camera cam = pb::camera(scene);
 
   // The reference takes minutes at 1M tets; it depends only on the scene, so it is cached.
   const std::string ref_path = pb::reference_path(scene, data_dir);
