@@ -199,17 +199,6 @@ Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   if (m_config.backend == Backend::automatic) m_config.cpu_fallback = true;
-  if (lit(m_config)) {
-    // Shading runs in the CPU ray caster only so far.
-    if (m_config.backend == Backend::gpu)
-      throw Error(ErrorCode::backend_unavailable,
-                  "config: lighting model \"" + lighting_label(*m_config.lighting) +
-                      "\" is rendered by the CPU backend only; use backend \"cpu\" or \"auto\", or lighting model \"none\"");
-    if (m_config.backend == Backend::automatic) {
-      log_line("backend \"auto\": lighting is rendered on the CPU");
-      m_config.backend = Backend::cpu;
-    }
-  }
   m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);
@@ -383,7 +372,7 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
       m_last_step.light_ms += ms_since(t_occ);
     }
     const auto t0 = Clock::now();
-    const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera)
+    const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera, options)
                                                    : m_mesh->caster->render(scalars, tf, cam.camera, options);
     render_ms += ms_since(t0);
     const std::string rel = m_database->new_image_path(m_field_labels[index], cycle_text + cam.stem);

@@ -19,6 +19,7 @@ layout(std430, binding = 4) readonly buffer Triangles { ivec4 triangles[]; };
 layout(std430, binding = 5) readonly buffer Nodes { vec4 bvh_nodes[]; };
 layout(std430, binding = 6) readonly buffer Tf { float tf_data[]; };
 layout(std430, binding = 7) writeonly buffer Pixels { vec4 pixels[]; };
+layout(std430, binding = 8) readonly buffer LightRgb { float light_rgb[]; };  // 3 per point (u_shading 2)
 
 uniform ivec2 u_image_size;
 uniform ivec2 u_tile_origin;     // first pixel of this dispatch
@@ -35,6 +36,11 @@ uniform int u_tet_count;
 uniform int u_triangle_count;
 uniform int u_breakpoint_count;
 uniform float u_series[64];      // coefficients of 1 - Z, see gpu_tf_layout.h
+// Shading (penumbra/render/shading.h): 0 none, 1 Phong, 2 Phong times the light field.
+uniform int u_shading;
+uniform vec4 u_phong;            // ambient, diffuse, specular, shininess
+uniform vec3 u_to_light;         // unit, towards the key light
+uniform int u_headlight;         // 1: the light comes from the eye
 
 const int kPieceFloats = 12;
 const int kMaxZeroLengthSteps = 1024;
@@ -173,7 +179,10 @@ float one_minus_z(float a, float b) {
 }
 
 // Composites the part of a segment inside piece p, scalar sa -> sb over `len`, onto (rgb, T).
-void integrate_in_piece(int p, float sa, float sb, float len, inout vec3 rgb, inout float T) {
+// The emitted colour is multiplied by the modulation running from mf (front of the whole
+// segment) to mb (back); [fa, fb] is where this piece lies along the segment.
+void integrate_in_piece(int p, float sa, float sb, float len, vec3 mf, vec3 mb, float fa, float fb, inout vec3 rgb,
+                        inout float T) {
   int o = p * kPieceFloats;
   if (tf_data[o + 3] != 0.0 || !(len > 0.0)) return;
   float s_ref = tf_data[o], tau_ref = tf_data[o + 1], tau1 = tf_data[o + 2];
@@ -182,8 +191,8 @@ void integrate_in_piece(int p, float sa, float sb, float len, inout vec3 rgb, in
   if (a == 0.0 && b == 0.0) return;
   vec3 col_ref = vec3(tf_data[o + 4], tf_data[o + 5], tf_data[o + 6]);
   vec3 col1 = vec3(tf_data[o + 8], tf_data[o + 9], tf_data[o + 10]);
-  vec3 cf = col_ref + col1 * (sa - s_ref);
-  vec3 cb = col_ref + col1 * (sb - s_ref);
+  vec3 cf = (col_ref + col1 * (sa - s_ref)) * mix(mf, mb, fa);
+  vec3 cb = (col_ref + col1 * (sb - s_ref)) * mix(mf, mb, fb);
   float w = one_minus_z(a, b);           // weight of the front colour, 1 - Z
   float absorbed = one_minus_exp(0.5 * (a + b));
   rgb += T * (cf * w + cb * (absorbed - w));
@@ -191,10 +200,10 @@ void integrate_in_piece(int p, float sa, float sb, float len, inout vec3 rgb, in
 }
 
 // The segment s0 (front) -> s1 (back) of `len`, cut at every breakpoint in between.
-void integrate(float s0, int p0, float s1, int p1, float len, inout vec3 rgb, inout float T) {
+void integrate(float s0, int p0, float s1, int p1, float len, vec3 mf, vec3 mb, inout vec3 rgb, inout float T) {
   if (!(len > 0.0)) return;
   if (p0 == p1) {
-    integrate_in_piece(p0, s0, s1, len, rgb, T);
+    integrate_in_piece(p0, s0, s1, len, mf, mb, 0.0, 1.0, rgb, T);
     return;
   }
   int step = p1 > p0 ? 1 : -1;
@@ -204,22 +213,55 @@ void integrate(float s0, int p0, float s1, int p1, float len, inout vec3 rgb, in
     bool last = p == p1;
     float sb = last ? s1 : breakpoint(step > 0 ? p : p - 1);
     float fb = last ? 1.0 : (sb - s0) * inv_ds;
-    integrate_in_piece(p, sa, sb, (fb - fa) * len, rgb, T);
+    integrate_in_piece(p, sa, sb, (fb - fa) * len, mf, mb, fa, fb, rgb, T);
     if (last) break;
     sa = sb;
     fa = fb;
   }
 }
 
+// ---- shading --------------------------------------------------------------------------------
+
+// L(x) at point id (non-finite values: no light); white without a light field.
+vec3 light_at(int id) {
+  if (u_shading != 2) return vec3(1.0);
+  vec3 l = vec3(light_rgb[3 * id], light_rgb[3 * id + 1], light_rgb[3 * id + 2]);
+  for (int c = 0; c < 3; ++c)
+    if (isnan(l[c]) || isinf(l[c])) l[c] = 0.0;
+  return l;
+}
+
+vec3 point_at(int id) { return vec3(point_xyz[3 * id], point_xyz[3 * id + 1], point_xyz[3 * id + 2]); }
+
+// The Phong factor of a tet (as the CPU caster): its scalar gradient is the normal, two-sided; a
+// vanishing or undefined gradient is lit as if facing the light, without a highlight.
+float phong_factor(ivec4 wv) {
+  if (u_shading == 0) return 1.0;
+  vec3 p0 = point_at(wv.x);
+  vec3 e1 = point_at(wv.y) - p0, e2 = point_at(wv.z) - p0, e3 = point_at(wv.w) - p0;
+  float s0 = scalars[wv.x];
+  vec3 g = cross(e2, e3) * (scalars[wv.y] - s0) + cross(e3, e1) * (scalars[wv.z] - s0) + cross(e1, e2) * (scalars[wv.w] - s0);
+  float gl = length(g);
+  if (!(gl > 0.0) || isinf(gl) || isnan(gl)) return u_phong.x + u_phong.y;
+  vec3 n = g / gl, view = -g_d;
+  vec3 l = u_headlight != 0 ? view : u_to_light;
+  vec3 h = l + view;
+  float hl = length(h);
+  h = hl > 0.0 ? h / hl : l;
+  float spec = u_phong.w > 0.0 ? pow(abs(dot(n, h)), u_phong.w) : 1.0;
+  return u_phong.x + u_phong.y * abs(dot(n, l)) + u_phong.z * spec;
+}
+
 // ---- boundary entries -----------------------------------------------------------------------
 
 // Where the ray enters through boundary triangle i, if it does.
-bool entry_through(int i, out float t, out float s, out bool s_nan) {
+bool entry_through(int i, out float t, out float s, out bool s_nan, out vec3 l) {
   ivec4 tri = triangles[i];
   vec3 q0 = project(tri.x), q1 = project(tri.y), q2 = project(tri.z);
   t = 0.0;
   s = 0.0;
   s_nan = false;
+  l = vec3(1.0);
   // The ray enters through an outward face when it sees the face clockwise.
   float e0 = edge_value(q0, tri.x, q1, tri.y);
   if (edge_sign(e0, q0, tri.x, q1, tri.y) >= 0) return false;
@@ -235,6 +277,7 @@ bool entry_through(int i, out float t, out float s, out bool s_nan) {
   vec3 sv = vec3(scalar_at(tri.x, nan), scalar_at(tri.y, nan), scalar_at(tri.z, nan));
   s = dot(w, sv) / sum;
   s_nan = nan;
+  if (u_shading == 2) l = (w.x * light_at(tri.x) + w.y * light_at(tri.y) + w.z * light_at(tri.z)) / sum;
   return true;
 }
 
@@ -257,11 +300,12 @@ bool box_hit(int node, float t0, float t1) {
 // The first entry (by depth, then triangle index) after (prev_t, prev_id) with depth >= t_floor:
 // the CPU caster's sorted entry list, taken one at a time.
 bool next_entry(float t_floor, float prev_t, int prev_id, float box_t0, out int best_id, out float best_t,
-                out float best_s, out bool best_nan) {
+                out float best_s, out bool best_nan, out vec3 best_l) {
   best_id = -1;
   best_t = kInf;
   best_s = 0.0;
   best_nan = false;
+  best_l = vec3(1.0);
   if (u_triangle_count == 0) return false;
   int stack[64];
   int top = 0;
@@ -275,7 +319,8 @@ bool next_entry(float t_floor, float prev_t, int prev_id, float box_t0, out int 
       for (int i = first; i < first + count; ++i) {
         float t, s;
         bool nan;
-        if (!entry_through(i, t, s, nan)) continue;
+        vec3 l;
+        if (!entry_through(i, t, s, nan, l)) continue;
         if (t < t_floor) continue;
         if (!(t > prev_t || (t == prev_t && i > prev_id))) continue;
         if (t < best_t || (t == best_t && i < best_id)) {
@@ -283,6 +328,7 @@ bool next_entry(float t_floor, float prev_t, int prev_id, float box_t0, out int 
           best_t = t;
           best_s = s;
           best_nan = nan;
+          best_l = l;
         }
       }
     } else if (top + 2 <= 64) {
@@ -316,7 +362,7 @@ vec3 vertex_q(int id, ivec3 face_id, vec3 f0, vec3 f1, vec3 f2) {
 // Walks from the entry face `k` of `tet` to the boundary exit (or until the ray is opaque);
 // returns the exit depth. Written without dynamically indexed local arrays, which GPUs (and
 // llvmpipe) would move to slow memory.
-float walk(int tet, int k, float t_in, float s_in, bool nan_in, inout vec3 rgb, inout float T) {
+float walk(int tet, int k, float t_in, float s_in, bool nan_in, vec3 l_in, inout vec3 rgb, inout float T) {
   int p_in = nan_in ? -1 : piece_of(s_in);
   int zero_steps = 0;
   ivec3 face_id = ivec3(-1);
@@ -349,6 +395,7 @@ float walk(int tet, int k, float t_in, float s_in, bool nan_in, inout vec3 rgb, 
     float sum = wd + wx + wy;
     float t_out = t_in, s_out = s_in;
     bool nan_out = nan_in;
+    vec3 l_out = l_in;
     if (sum > 0.0) {
       float inv = 1.0 / sum;
       t_out = (wd * qD.z + wx * qX.z + wy * qY.z) * inv;
@@ -356,6 +403,7 @@ float walk(int tet, int k, float t_in, float s_in, bool nan_in, inout vec3 rgb, 
       float sd = scalar_at(iD, nan), sx = scalar_at(iX, nan), sy = scalar_at(iY, nan);
       s_out = (wd * sd + wx * sx + wy * sy) * inv;
       nan_out = nan;
+      if (u_shading == 2) l_out = (wd * light_at(iD) + wx * light_at(iX) + wy * light_at(iY)) * inv;
     }
     int p_out = nan_out ? -1 : piece_near(s_out, p_in);
     if (t_out <= t_in) {
@@ -364,22 +412,26 @@ float walk(int tet, int k, float t_in, float s_in, bool nan_in, inout vec3 rgb, 
     } else {
       zero_steps = 0;
       // Only the part in front of the origin counts.
-      float t0 = t_in, s0 = s_in;
+      float t0 = t_in, s0 = s_in, clip = 0.0;
       int p0 = p_in;
       if (t0 < 0.0 && t_out > 0.0) {
-        s0 = s_in + (s_out - s_in) * (-t_in / (t_out - t_in));
+        clip = -t_in / (t_out - t_in);
+        s0 = s_in + (s_out - s_in) * clip;
         t0 = 0.0;
         p0 = p_in < 0 ? -1 : piece_of(s0);
       }
       if (t_out > t0 && t0 >= 0.0) {
-        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && piece_empty(p0)))
-          integrate(s0, p0, s_out, p_out, t_out - t0, rgb, T);
+        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && piece_empty(p0))) {
+          float phong = phong_factor(wv);
+          integrate(s0, p0, s_out, p_out, t_out - t0, mix(l_in, l_out, clip) * phong, l_out * phong, rgb, T);
+        }
         if (T < u_stop_transmittance) return t_out;
       }
     }
     t_in = t_out;
     s_in = s_out;
     p_in = p_out;
+    l_in = l_out;
     face_id = ivec3(iD, iX, iY);
     f0 = qD;
     f1 = qX;
@@ -415,14 +467,15 @@ void main() {
     int id;
     float t, s;
     bool nan;
+    vec3 l;
     // An entry before the last exit lies on a stretch already walked (a grazing touch); the
     // slack keeps a re-entry at the same depth across unmatched faces (hanging nodes).
     float t_floor = done - u_reentry_slack;
-    if (!next_entry(t_floor, prev_t, prev_id, max(box_t0, t_floor), id, t, s, nan)) break;
+    if (!next_entry(t_floor, prev_t, prev_id, max(box_t0, t_floor), id, t, s, nan, l)) break;
     prev_t = t;
     prev_id = id;
     int tet_face = triangles[id].w;
-    done = walk(tet_face >> 2, tet_face & 3, t, s, nan, rgb, T);
+    done = walk(tet_face >> 2, tet_face & 3, t, s, nan, l, rgb, T);
     if (T < u_stop_transmittance) break;
   }
   pixels[local.y * u_tile_size.x + local.x] = vec4(rgb, 1.0 - T);

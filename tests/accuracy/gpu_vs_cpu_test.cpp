@@ -154,3 +154,39 @@ TEST(GpuVsCpu, HangingNodesReenterAcrossUnmatchedFaces) {
 
 }  // namespace
 }  // namespace penumbra
+
+namespace penumbra {
+namespace {
+
+// Shading (penumbra/render/shading.h) on both paths: Phong from the per-tet gradient with a key
+// light, and Phong times a light field that varies across the mesh (with NaN points, which
+// count as no light). Same tolerances as the unshaded scenes: the factors are computed in
+// float32 on the GPU from the same inputs.
+TEST(GpuVsCpu, PhongAndLightFieldShading) {
+  auto m = fixtures::tet_block_with_hole(8);
+  for (double& v : m.xyz) v = 2.0 * v - 1.0;
+  const auto mesh = test::prepare(m);
+  const auto cam = render::Camera::orbit(mesh->bounds, 47, 31, 30, kSize, kSize);
+  render::RenderOptions phong;
+  phong.shading.model = render::LightingModel::phong;
+  phong.shading.light_direction = {0.3, -0.5, 0.8};
+  expect_same_pictures("phong, key light", m, field_on(m), multi_point_tf(), cam, phong);
+  phong.shading.light_direction = {0, 0, 0};
+  expect_same_pictures("phong, headlight", m, field_on(m), multi_point_tf(), cam, phong);
+
+  std::vector<float> light(3 * mesh->points.size());
+  for (std::size_t i = 0; i < mesh->points.size(); ++i) {
+    const Vec3d& p = mesh->points[i];
+    light[3 * i] = static_cast<float>(0.5 + 0.5 * std::exp(-p.x - 1.0));
+    light[3 * i + 1] = static_cast<float>(0.3 + 0.6 * (p.y + 1.0) / 2.0);
+    light[3 * i + 2] = i % 97 == 0 ? std::nanf("") : 1.0f;
+  }
+  render::RenderOptions lit;
+  lit.shading.model = render::LightingModel::light_volume;
+  lit.shading.light_rgb = &light;
+  lit.shading.light_direction = {-0.4, 0.2, 0.9};
+  expect_same_pictures("light field", m, field_on(m), multi_point_tf(), cam, lit);
+}
+
+}  // namespace
+}  // namespace penumbra

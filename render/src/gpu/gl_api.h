@@ -41,6 +41,7 @@ namespace penumbra::render::gpu {
   X(PFNGLPROGRAMUNIFORM1FPROC, ProgramUniform1f)                  \
   X(PFNGLPROGRAMUNIFORM2FPROC, ProgramUniform2f)                  \
   X(PFNGLPROGRAMUNIFORM3FPROC, ProgramUniform3f)                  \
+  X(PFNGLPROGRAMUNIFORM4FPROC, ProgramUniform4f)                  \
   X(PFNGLPROGRAMUNIFORM1FVPROC, ProgramUniform1fv)                \
   X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                    \
   X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)

@@ -24,7 +24,9 @@ namespace {
 using gpu::CurrentContext;
 using gpu::GlApi;
 
-enum Binding : GLuint { kPoints, kTetVertices, kTetNext, kScalars, kTriangles, kNodes, kTf, kPixels, kBindingCount };
+enum Binding : GLuint {
+  kPoints, kTetVertices, kTetNext, kScalars, kTriangles, kNodes, kTf, kPixels, kLight, kBindingCount
+};
 constexpr int kTile = 512;                     // pixels per side of one dispatch
 constexpr std::size_t kScalarBlock = 1 << 14;  // field values compared and re-sent per block
 
@@ -203,6 +205,7 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const double opacity = options.early_termination_opacity;
   require(opacity > 0 && opacity <= 1, "GpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
                                            "; expected a value in (0, 1]");
+  options.shading.validate("GpuRayCaster::render", m.mesh->points.size());
   const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf);
 
   GpuDevice::Impl& d = m.dev();
@@ -216,7 +219,16 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const int tile_w = std::min(camera.width, kTile), tile_h = std::min(camera.height, kTile);
   const std::size_t tile_bytes = static_cast<std::size_t>(tile_w) * tile_h * 4 * sizeof(float);
   if (m.capacity[kPixels] < tile_bytes) m.allocate(gl, kPixels, tile_bytes, nullptr);
-  m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels];
+  const Shading& shading = options.shading;
+  if (shading.model == LightingModel::light_volume) {
+    // The light field changes with every light update: sent whole (12 B per point).
+    const std::size_t bytes = shading.light_rgb->size() * sizeof(float);
+    if (m.capacity[kLight] < bytes) m.allocate(gl, kLight, bytes, nullptr);
+    gl.NamedBufferSubData(m.buffers[kLight], 0, static_cast<GLsizeiptr>(bytes), shading.light_rgb->data());
+  } else if (m.capacity[kLight] == 0) {
+    m.allocate(gl, kLight, 16, nullptr);  // bound but unread
+  }
+  m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels] + m.capacity[kLight];
   for (GLuint b = 0; b < kBindingCount; ++b) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, m.buffers[b]);
 
   // The camera of Camera::primary_ray, relative to the mesh centre like the points.
@@ -251,6 +263,14 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   gl.ProgramUniform1i(program, m.uniform(gl, "u_tet_count"), static_cast<GLint>(m.stats.tets));
   gl.ProgramUniform1i(program, m.uniform(gl, "u_triangle_count"), static_cast<GLint>(m.triangle_count));
   gl.ProgramUniform1i(program, m.uniform(gl, "u_breakpoint_count"), table.breakpoint_count);
+  const int model = shading.model == LightingModel::none ? 0 : (shading.model == LightingModel::phong ? 1 : 2);
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_shading"), model);
+  gl.ProgramUniform4f(program, m.uniform(gl, "u_phong"), static_cast<float>(shading.ambient),
+                      static_cast<float>(shading.diffuse), static_cast<float>(shading.specular),
+                      static_cast<float>(shading.shininess));
+  const double dl = length(shading.light_direction);
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_headlight"), dl > 0 ? 0 : 1);
+  u3("u_to_light", dl > 0 ? shading.light_direction / dl : Vec3d{0, 0, 1});
   gl.UseProgram(program);
 
   Image image(camera.width, camera.height);
