@@ -131,6 +131,12 @@ std::string config_json(const std::string& out) {
         "opacities": [[0, 4], [0.5, 8], [1, 30]]
       }
     }],
+    "lighting": {
+      "model": "light-volume",
+      "lights": [{"type": "directional", "direction": [-0.6, 0.3, -1], "color": [1, 0.97, 0.9]}],
+      "absorption": 0.08, "scattering": 0.5, "level0_resolution": 48,
+      "phong": {"ambient": 0.75, "diffuse": 0.35, "specular": 0.15}
+    },
     "trigger": {"every_cycles": )" + std::to_string(kEvery) + R"(}
   })";
 }
