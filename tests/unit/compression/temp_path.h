@@ -11,9 +11,35 @@
 
 namespace penumbra::compression::testing {
 
+/// Removes every scratch file a test asked for (and its `.partial` and `.tmp` siblings) when the
+/// test ends, whatever its outcome.
+class ScratchCleaner : public ::testing::EmptyTestEventListener {
+public:
+  static ScratchCleaner& instance() {
+    // Owned by gtest's listener list once appended.
+    static ScratchCleaner* cleaner = [] {
+      auto* c = new ScratchCleaner;
+      ::testing::UnitTest::GetInstance()->listeners().Append(c);
+      return c;
+    }();
+    return *cleaner;
+  }
+  void add(const std::string& path) { m_paths.push_back(path); }
+  void OnTestEnd(const ::testing::TestInfo&) override {
+    for (const auto& p : m_paths)
+      for (const char* suffix : {"", ".partial", ".tmp"}) std::remove((p + suffix).c_str());
+    m_paths.clear();
+  }
+
+private:
+  std::vector<std::string> m_paths;
+};
+
 inline std::string temp_path(const std::string& stem) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  return ::testing::TempDir() + "pnb_" + std::to_string(::getpid()) + "_" + info->name() + "_" + stem;
+  std::string path = ::testing::TempDir() + "pnb_" + std::to_string(::getpid()) + "_" + info->name() + "_" + stem;
+  ScratchCleaner::instance().add(path);
+  return path;
 }
 
 inline std::vector<char> read_file(const std::string& path) {
