@@ -165,7 +165,8 @@ GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<co
   if (d.max_compute_storage_blocks < kBindingCount)
     throw Error(ErrorCode::backend_unavailable, "GPU backend: the device allows " +
                                                     std::to_string(d.max_compute_storage_blocks) +
-                                                    " storage buffers per compute shader; 8 are needed");
+                                                    " storage buffers per compute shader; " + std::to_string(static_cast<int>(kBindingCount)) +
+                                                    " are needed");
 
   CurrentContext current(d);
   const GlApi& gl = current.gl();
