@@ -12,6 +12,7 @@
 #include <string>
 
 #include "bvh.h"
+#include "tet_clip.h"
 #include "penumbra/core/error.h"
 #include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
@@ -20,63 +21,22 @@
 namespace penumbra::render {
 namespace {
 
-constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
 struct Interval {
   double t0, t1;
   std::int32_t tet;
   bool operator<(const Interval& o) const { return t0 < o.t0 || (t0 == o.t0 && t1 < o.t1); }
 };
 
-struct RefRay {
-  Vec3d o, d, u, v;  // unit d; u, v complete an orthonormal frame (for the in-plane tie rule)
-  explicit RefRay(const Ray& ray) : o(ray.origin), d(normalize(ray.direction)) {
-    const Vec3d helper = std::fabs(d.x) < 0.5 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
-    u = normalize(cross(helper, d));
-    v = cross(d, u);
-  }
+// The ray as a clip line (unit direction).
+struct RefRay : detail::ClipLine {
+  explicit RefRay(const Ray& ray) : detail::ClipLine(ray.origin, normalize(ray.direction)) {}
 };
 
-// Clips the ray (t >= 0) against tet `t`; returns false when the intersection is empty or a
-// single point. A ray lying exactly in a face plane is displaced by (eps u + eps^2 v), so of
-// two tets sharing that face exactly one contains it.
 bool clip(const TetMesh& mesh, std::int32_t t, const RefRay& r, Interval& out) {
-  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-  double lo = 0.0, hi = std::numeric_limits<double>::infinity();
-  for (const auto& f : kFaceVertices) {
-    const Vec3d& a = mesh.points[static_cast<std::size_t>(tv[f[0]])];
-    const Vec3d& b = mesh.points[static_cast<std::size_t>(tv[f[1]])];
-    const Vec3d& c = mesh.points[static_cast<std::size_t>(tv[f[2]])];
-    const Vec3d n = cross(b - a, c - a);  // outward
-    const double h0 = dot(n, r.o - a), hd = dot(n, r.d);
-    if (hd < 0) {
-      lo = std::max(lo, -h0 / hd);
-    } else if (hd > 0) {
-      hi = std::min(hi, -h0 / hd);
-    } else {
-      const double nu = dot(n, r.u), nv = dot(n, r.v);
-      const bool inside = h0 < 0 || (h0 == 0 && (nu < 0 || (nu == 0 && nv <= 0)));
-      if (!inside) return false;
-    }
-    if (!(hi > lo)) return false;
-  }
+  double lo = 0, hi = 0;
+  if (!detail::clip_to_tet(mesh, t, r, std::numeric_limits<double>::infinity(), lo, hi)) return false;
   out = {lo, hi, t};
   return true;
-}
-
-// Scalar at point x of tet t by barycentric coordinates (NaN when any vertex is NaN).
-double scalar_at(const TetMesh& mesh, const std::vector<float>& s, std::int32_t t, const Vec3d& x) {
-  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-  Vec3d p[4];
-  for (int k = 0; k < 4; ++k) p[k] = mesh.points[static_cast<std::size_t>(tv[k])];
-  const double vol = signed_volume6(p[0], p[1], p[2], p[3]);
-  double sum = 0;
-  for (int k = 0; k < 4; ++k) {
-    Vec3d q[4] = {p[0], p[1], p[2], p[3]};
-    q[k] = x;
-    sum += signed_volume6(q[0], q[1], q[2], q[3]) / vol * static_cast<double>(s[static_cast<std::size_t>(tv[k])]);
-  }
-  return sum;
 }
 
 struct Accum {
@@ -183,8 +143,8 @@ RayTrace integrate_intervals(const TetMesh& mesh, const std::vector<float>& scal
   const double gap = 1e-9 * mesh.bounds.diagonal(), graze = 1e-12 * mesh.bounds.diagonal();
   double last_end = -std::numeric_limits<double>::infinity(), run_length = 0;
   for (const Interval& i : iv) {
-    const double s0 = scalar_at(mesh, scalars, i.tet, r.o + r.d * i.t0);
-    const double s1 = scalar_at(mesh, scalars, i.tet, r.o + r.d * i.t1);
+    const double s0 = detail::scalar_in_tet(mesh, scalars, i.tet, r.o + r.d * i.t0);
+    const double s1 = detail::scalar_in_tet(mesh, scalars, i.tet, r.o + r.d * i.t1);
     integrate_interval(tf, breaks, s0, s1, i.t1 - i.t0, acc);
     if (i.t0 > last_end + gap) {
       out.entries += run_length > graze;

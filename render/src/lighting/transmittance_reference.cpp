@@ -11,54 +11,21 @@
 #include <limits>
 
 #include "bvh.h"
+#include "tet_clip.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/light_volume.h"
 
 namespace penumbra::render {
 namespace {
 
-constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
-struct Line {
-  Vec3d o, d, u, v;
-  double t_max;
+// A line towards a light; t_max ends it at a point light.
+struct Line : detail::ClipLine {
+  using detail::ClipLine::ClipLine;
+  double t_max = 0;
 };
 
 bool clip(const TetMesh& mesh, std::int32_t t, const Line& r, double& lo, double& hi) {
-  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-  lo = 0.0;
-  hi = r.t_max;
-  for (const auto& f : kFaces) {
-    const Vec3d& a = mesh.points[static_cast<std::size_t>(tv[f[0]])];
-    const Vec3d& b = mesh.points[static_cast<std::size_t>(tv[f[1]])];
-    const Vec3d& c = mesh.points[static_cast<std::size_t>(tv[f[2]])];
-    const Vec3d n = cross(b - a, c - a);  // outward
-    const double h0 = dot(n, r.o - a), hd = dot(n, r.d);
-    if (hd < 0) {
-      lo = std::max(lo, -h0 / hd);
-    } else if (hd > 0) {
-      hi = std::min(hi, -h0 / hd);
-    } else {
-      const double nu = dot(n, r.u), nv = dot(n, r.v);
-      if (!(h0 < 0 || (h0 == 0 && (nu < 0 || (nu == 0 && nv <= 0))))) return false;
-    }
-    if (!(hi > lo)) return false;
-  }
-  return true;
-}
-
-double scalar_at(const TetMesh& mesh, const std::vector<float>& s, std::int32_t t, const Vec3d& x) {
-  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-  Vec3d p[4];
-  for (int k = 0; k < 4; ++k) p[k] = mesh.points[static_cast<std::size_t>(tv[k])];
-  const double vol = signed_volume6(p[0], p[1], p[2], p[3]);
-  double sum = 0;
-  for (int k = 0; k < 4; ++k) {
-    Vec3d q[4] = {p[0], p[1], p[2], p[3]};
-    q[k] = x;
-    sum += signed_volume6(q[0], q[1], q[2], q[3]) / vol * static_cast<double>(s[static_cast<std::size_t>(tv[k])]);
-  }
-  return sum;
+  return detail::clip_to_tet(mesh, t, r, r.t_max, lo, hi);
 }
 
 double interval_depth(const TransferFunction& tf, const std::vector<double>& breaks, double s0, double s1, double len) {
@@ -76,19 +43,17 @@ double interval_depth(const TransferFunction& tf, const std::vector<double>& bre
 }
 
 Line line_to(const Light& light, const Vec3d& x) {
-  Line r;
-  r.o = x;
+  Vec3d d{1, 0, 0};
+  double t_max = std::numeric_limits<double>::infinity();
   if (light.kind == Light::Kind::directional) {
-    r.d = -normalize(light.vector);
-    r.t_max = std::numeric_limits<double>::infinity();
+    d = -normalize(light.vector);
   } else {
     const Vec3d to = light.vector - x;
-    r.t_max = length(to);
-    r.d = r.t_max > 0 ? to / r.t_max : Vec3d{1, 0, 0};
+    t_max = length(to);
+    if (t_max > 0) d = to / t_max;
   }
-  const Vec3d helper = std::fabs(r.d.x) < 0.5 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
-  r.u = normalize(cross(helper, r.d));
-  r.v = cross(r.d, r.u);
+  Line r(x, d);
+  r.t_max = t_max;
   return r;
 }
 
@@ -138,8 +103,8 @@ double LightTransmittanceReference::optical_depth(const std::vector<float>& scal
   m_impl->bvh.for_each_on_line(r.o, r.d, 0.0, r.t_max, [&](std::int32_t t) {
     double lo, hi;
     if (!clip(mesh, t, r, lo, hi)) return;
-    const double s0 = scalar_at(mesh, scalars, t, r.o + r.d * lo);
-    const double s1 = scalar_at(mesh, scalars, t, r.o + r.d * hi);
+    const double s0 = detail::scalar_in_tet(mesh, scalars, t, r.o + r.d * lo);
+    const double s1 = detail::scalar_in_tet(mesh, scalars, t, r.o + r.d * hi);
     depth += interval_depth(tf, breaks, s0, s1, hi - lo);
   });
   return depth;
