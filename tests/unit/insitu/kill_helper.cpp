@@ -1,5 +1,6 @@
 // tests/unit/insitu/kill_helper.cpp -- a "solver" that renders steps until it is killed.
-// Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS
+// Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS [STORE_DIR]
+// With STORE_DIR the run also keeps its compressed history there (windows of 8 steps).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -9,10 +10,12 @@
 #include "penumbra/penumbra.h"
 
 int main(int argc, char** argv) {
-  if (argc != 5) return 2;
+  if (argc != 5 && argc != 6) return 2;
+  const std::string store =
+      argc == 6 ? R"(, "store": {"directory": ")" + std::string(argv[5]) + R"(", "window": 8})" : std::string();
   const std::string config = R"({"output": {"directory": ")" + std::string(argv[1]) + R"(", "if_exists": ")" +
                              argv[4] + R"("}, "image": {"width": 32, "height": 32},
-      "cameras": {"phi": [0, 120, 240], "theta": [20]}, "fields": [{"name": "T"}, {"name": "T2"}]})";
+      "cameras": {"phi": [0, 120, 240], "theta": [20]}, "fields": [{"name": "T"}, {"name": "T2"}])" + store + "}";
   pnb_context ctx = nullptr;
   if (pnb_create(config.c_str(), &ctx) != PNB_OK) {
     std::fprintf(stderr, "%s\n", pnb_last_error(nullptr));

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "cinema_database.h"
+#include "penumbra/insitu/stored_run.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/image.h"
 #include "test_util.h"
@@ -22,9 +23,11 @@ namespace {
 using testing::TempDir;
 
 /// Starts the helper solver; returns its pid.
-pid_t spawn_solver(const std::string& dir, long first, long steps, const char* if_exists) {
+pid_t spawn_solver(const std::string& dir, long first, long steps, const char* if_exists,
+                   const std::string& store = "") {
   const std::string f = std::to_string(first), s = std::to_string(steps);
-  const char* argv[] = {PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists, nullptr};
+  const char* argv[] = {PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists,
+                        store.empty() ? nullptr : store.c_str(), nullptr};
   pid_t pid = -1;
   if (posix_spawn(&pid, PNB_KILL_HELPER, nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
   return pid;
@@ -85,6 +88,32 @@ TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
     for (std::size_t r = 0; r < table.size(); ++r) EXPECT_EQ(resumed[r], table[r]) << "row " << r << " changed";
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
       EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << "left over: " << e.path();
+  }
+}
+
+TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
+  TempDir tmp;
+  const std::string dir = tmp / "db", store = tmp / "store";
+  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store);
+  ASSERT_GT(pid, 0);
+  // 20 rendered steps (6 images each): two windows of 8 are finished or being written.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (listed_rows(dir) < 6 * 20 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  kill(pid, SIGKILL);
+  ASSERT_TRUE(WIFSIGNALED(wait_exit(pid))) << "the solver ended before it was killed";
+  const std::size_t rendered = listed_rows(dir) / 6;
+  auto run = StoredRun::open(store + "/segment-000");
+  EXPECT_EQ(run->fields(), (std::vector<std::string>{"T", "T2"}));
+  // Whole windows only: at least the first one (the second may still have been in flight).
+  EXPECT_GE(run->step_count(), 8u);
+  EXPECT_EQ(run->step_count() % 8, 0u);
+  EXPECT_LE(run->step_count(), rendered + 1);
+  std::vector<float> values;
+  for (std::size_t s = 0; s < run->step_count(); ++s) {
+    EXPECT_EQ(run->cycle(s), static_cast<std::int64_t>(s));
+    run->read("T", s, values);
+    EXPECT_EQ(values.size(), run->mesh().point_count());
   }
 }
 
