@@ -335,11 +335,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "pnb_bench_light: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return penumbra::bench::guarded_main("pnb_bench_light", run, argc, argv); }

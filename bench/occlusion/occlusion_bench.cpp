@@ -365,11 +365,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "pnb_bench_occlusion: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return penumbra::bench::guarded_main("pnb_bench_occlusion", run, argc, argv); }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <exception>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -80,6 +82,17 @@ inline double load_average() {
   double v = -1;
   if (!(in >> v)) return -1;
   return v;
+}
+
+/// A benchmark program's main: runs `run`, and turns an exception into one line on stderr
+/// (prefixed by the program's name) and exit status 1.
+inline int guarded_main(const char* program, int (*run)(int, char**), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", program, e.what());
+    return 1;
+  }
 }
 
 }  // namespace penumbra::bench
