@@ -40,35 +40,12 @@
 #include "penumbra/core/error.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "vtk_scene.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
 
 namespace {
-
-vtkSmartPointer<vtkUnstructuredGrid> make_grid(const pb::Scene& scene) {
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(static_cast<vtkIdType>(scene.point_count()));
-  for (std::size_t i = 0; i < scene.point_count(); ++i)
-    points->SetPoint(static_cast<vtkIdType>(i), &scene.points[i * 3]);
-  vtkNew<vtkIdTypeArray> offsets, connectivity;
-  offsets->SetNumberOfValues(static_cast<vtkIdType>(scene.tet_count() + 1));
-  for (std::size_t c = 0; c <= scene.tet_count(); ++c) offsets->SetValue(static_cast<vtkIdType>(c), 4 * static_cast<vtkIdType>(c));
-  connectivity->SetNumberOfValues(static_cast<vtkIdType>(scene.tets.size()));
-  for (std::size_t i = 0; i < scene.tets.size(); ++i) connectivity->SetValue(static_cast<vtkIdType>(i), scene.tets[i]);
-  vtkNew<vtkCellArray> cells;
-  cells->SetData(offsets, connectivity);
-  vtkNew<vtkFloatArray> scalars;
-  scalars->SetName("s");
-  scalars->SetNumberOfValues(static_cast<vtkIdType>(scene.scalars.size()));
-  for (std::size_t i = 0; i < scene.scalars.size(); ++i) scalars->SetValue(static_cast<vtkIdType>(i), scene.scalars[i]);
-  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
-  grid->SetPoints(points);
-  grid->SetCells(VTK_TETRA, cells);
-  grid->GetPointData()->SetScalars(scalars);
-  return grid;
-}
 
 // One node list for colour and opacity: VTK's unstructured integrators take breakpoints from
 // the colour function only. With a unit distance of 1, the opacity value is the extinction per
@@ -230,7 +207,7 @@ int run(int argc, char** argv) {
     penumbra::require(w == scene.width && h == scene.height, "pnb_bench_render_vtk: reference has the wrong size");
   }
 
-  const vtkSmartPointer<vtkUnstructuredGrid> grid = make_grid(scene);
+  const vtkSmartPointer<vtkUnstructuredGrid> grid = pb::make_grid(scene);
   std::stringstream list(renderers);
   for (std::string renderer; std::getline(list, renderer, ',');)
     std::cout << bench_mapper(scene, grid, renderer, integrator == "linear", frames, reference, data_dir).dump()
