@@ -169,6 +169,22 @@ pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle) {
   return guarded(ctx, [&] { ctx->context->execute(time, cycle); });
 }
 
+pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
+  if (!ctx) return null_context("pnb_last_step");
+  return guarded(ctx, [&] {
+    penumbra::require(out != nullptr, "pnb_last_step: out is NULL");
+    const penumbra::insitu::StepStats& s = ctx->context->last_step();
+    *out = {};
+    out->cycle = s.cycle;
+    out->images = s.images;
+    out->render_ms = s.render_ms;
+    out->total_ms = s.total_ms;
+    out->light_ms = s.light_ms;
+    out->light_residual = s.light.residual;
+    out->light_converged = s.light.converged ? 1 : 0;
+  });
+}
+
 pnb_status pnb_finalize(pnb_context ctx) {
   if (!ctx) return null_context("pnb_finalize");
   return guarded(ctx, [&] { ctx->context->finalize(); });

@@ -294,6 +294,16 @@ int main(void) {
   expect(pnb_execute(ctx, NAN, 2), PNB_INVALID_ARGUMENT, ctx, "time must be finite", "NaN time");
   expect(pnb_publish_field(ctx, &field, PNB_COPY), PNB_OK, ctx, NULL, "publish copied field");
   expect(pnb_execute(ctx, 0.2, 2), PNB_OK, ctx, NULL, "a later step still works");
+  {
+    pnb_step_stats stats;
+    memset(&stats, 0xff, sizeof stats);
+    expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step");
+    check(stats.cycle == 2 && stats.images == 2, "last step: cycle 2, two cameras", NULL);
+    check(stats.total_ms >= stats.render_ms && stats.render_ms > 0, "last step: times", NULL);
+    check(stats.light_ms == 0 && stats.light_residual == 0, "last step: no light volume, no light figures", NULL);
+    expect(pnb_last_step(ctx, NULL), PNB_INVALID_ARGUMENT, ctx, "out is NULL", "last step into NULL");
+    expect(pnb_last_step(NULL, &stats), PNB_INVALID_ARGUMENT, NULL, "pnb_last_step", "last step of a NULL ctx");
+  }
 
   snprintf(csv, sizeof csv, "%s/db/data.csv", tmp);
   f = fopen(csv, "r");

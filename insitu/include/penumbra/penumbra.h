@@ -94,6 +94,20 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
  * rendering step gives PNB_INVALID_OPERATION naming it (the other fields are still written);
  * so does a call before any mesh was published. */
 pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle);
+/* What the last rendering step did (zeros before the first). light_*: the light volume's
+ * solve of the last rendered field (lighting model "light-volume"; 0 otherwise): its time, its
+ * remaining change (0 once converged) and whether it converged within the step's budget. */
+typedef struct {
+  int64_t cycle;
+  int images;
+  double render_ms;
+  double total_ms;
+  double light_ms;
+  double light_residual;
+  int light_converged;
+} pnb_step_stats;
+/* Fills *out; PNB_INVALID_ARGUMENT for a NULL out. */
+pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);
 /* Finalizes: flushes pending work; the context stays valid only for pnb_destroy. */
 pnb_status pnb_finalize(pnb_context ctx);
 /* Message of the last failed call on ctx (or of the last failed pnb_create when ctx is NULL);
