@@ -4,6 +4,9 @@ execute_process(COMMAND ${EXE} ${OUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERR
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "fortran example failed (${rc}): ${out} ${err}")
 endif()
+if(NOT out MATCHES "last rendered step: cycle 20, 1 image")
+  message(FATAL_ERROR "pnb_last_step through the Fortran module reported: ${out}")
+endif()
 file(STRINGS ${OUT}/data.csv rows)
 list(LENGTH rows n)
 # Steps 0, 5, 10, 15, 20 with one camera and one field, plus the header row.

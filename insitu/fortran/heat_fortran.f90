@@ -14,6 +14,7 @@ program heat_fortran
   type(c_ptr) :: ctx
   type(pnb_mesh_desc) :: mesh
   type(pnb_field_desc) :: field
+  type(pnb_step_stats) :: stats
   integer :: i, j, k, c, s, status, p
 
   outdir = 'penumbra-fortran-db'
@@ -44,7 +45,7 @@ program heat_fortran
            '"image":{"width":96,"height":96},"cameras":{"phi":[30],"theta":[20]},' // &
            '"fields":[{"name":"temperature","range":[0,1],"transfer_function":{' // &
            '"colors":[[0,0.2,0.3,0.9],[1,1,0.4,0.1]],"opacities":[[0,0],[1,8]]}}],' // &
-           '"trigger":{"every":5}}'
+           '"trigger":{"every_cycles":5}}'
   status = pnb_create(config // c_null_char, ctx)
   if (status /= PNB_OK) then
     print *, 'pnb_create failed: ', pnb_last_error_message(c_null_ptr)
@@ -73,6 +74,8 @@ program heat_fortran
     call check(pnb_execute(ctx, 0.01d0 * s, int(s, c_int64_t)))
     call diffuse()
   end do
+  call check(pnb_last_step(ctx, stats))
+  print '(a,i0,a,i0,a)', 'last rendered step: cycle ', stats%cycle, ', ', stats%images, ' image(s)'
   call check(pnb_finalize(ctx))
   call pnb_destroy(ctx)
   print '(a)', 'wrote ' // trim(outdir)

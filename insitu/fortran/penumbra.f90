@@ -38,7 +38,16 @@ module penumbra
     integer(c_int) :: type = PNB_FLOAT64
   end type
 
+  !> Mirror of pnb_step_stats (pnb_last_step).
+  type, bind(C), public :: pnb_step_stats
+    integer(c_int64_t) :: cycle = 0
+    integer(c_int) :: images = 0
+    real(c_double) :: render_ms = 0, total_ms = 0, light_ms = 0, light_residual = 0
+    integer(c_int) :: light_converged = 0
+  end type
+
   public :: pnb_create, pnb_publish_mesh, pnb_publish_field, pnb_execute, pnb_finalize, pnb_destroy
+  public :: pnb_last_step
   public :: pnb_last_error_message
 
   interface
@@ -64,6 +73,11 @@ module penumbra
       type(c_ptr), value :: ctx
       real(c_double), value :: time
       integer(c_int64_t), value :: cycle
+    end function
+    integer(c_int) function pnb_last_step(ctx, stats) bind(C, name="pnb_last_step")
+      import :: c_int, c_ptr, pnb_step_stats
+      type(c_ptr), value :: ctx
+      type(pnb_step_stats), intent(out) :: stats
     end function
     integer(c_int) function pnb_finalize(ctx) bind(C, name="pnb_finalize")
       import :: c_int, c_ptr
