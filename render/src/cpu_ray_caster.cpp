@@ -178,7 +178,9 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     en.s = fp.mu[0] * geo.scalar(tri.v[0]) + fp.mu[1] * geo.scalar(tri.v[1]) + fp.mu[2] * geo.scalar(tri.v[2]);
     en.tet = tri.tet;
     en.face = tri.face;
-    if (shade != nullptr) {
+    if (shade != nullptr && shade->per_sample()) {
+      shade->light_at_position(f.origin + f.d * en.t, en.light);
+    } else if (shade != nullptr) {
       double l[3][3];
       for (int j = 0; j < 3; ++j) shade->light_at(tri.v[j], l[j]);
       for (int c = 0; c < 3; ++c) en.light[c] = fp.mu[0] * l[0][c] + fp.mu[1] * l[1][c] + fp.mu[2] * l[2][c];
@@ -255,11 +257,16 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
       t_out = fp.t;
       s_out = fp.mu[0] * geo.scalar(id[0]) + fp.mu[1] * geo.scalar(id[x]) + fp.mu[2] * geo.scalar(id[y]);
       if constexpr (kShaded) {
-        double ld[3], lx[3], ly[3];
-        shade->light_at(id[0], ld);
-        shade->light_at(id[x], lx);
-        shade->light_at(id[y], ly);
-        for (int c = 0; c < 3; ++c) l_out[c] = fp.mu[0] * ld[c] + fp.mu[1] * lx[c] + fp.mu[2] * ly[c];
+        if (shade->per_sample()) {
+          // Image space: the light at the segment's exit point itself.
+          shade->light_at_position(f.origin + f.d * t_out, l_out);
+        } else {
+          double ld[3], lx[3], ly[3];
+          shade->light_at(id[0], ld);
+          shade->light_at(id[x], lx);
+          shade->light_at(id[y], ly);
+          for (int c = 0; c < 3; ++c) l_out[c] = fp.mu[0] * ld[c] + fp.mu[1] * lx[c] + fp.mu[2] * ly[c];
+        }
       }
     } else if constexpr (kShaded) {
       for (int c = 0; c < 3; ++c) l_out[c] = l_in[c];

@@ -9,7 +9,7 @@ ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vec
                                 const Shading& shading) {
   ShadeContext sc;
   sc.shading = shading;
-  if (shading.model == LightingModel::light_volume) sc.light_rgb = shading.light_rgb->data();
+  if (shading.model == LightingModel::light_volume && !shading.light_at) sc.light_rgb = shading.light_rgb->data();
   const double dl = length(shading.light_direction);
   sc.headlight = !(dl > 0);
   if (!sc.headlight) sc.to_light = shading.light_direction / dl;

@@ -37,6 +37,14 @@ struct ShadeContext {
            shading.specular * std::pow(std::fabs(dot(normal, h)), shading.shininess);
   }
 
+  /// Image-space light (Shading::light_at) at x, when the shading has one.
+  bool per_sample() const { return static_cast<bool>(shading.light_at); }
+  void light_at_position(const Vec3d& x, double out[3]) const {
+    shading.light_at(x, out);
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(out[c])) out[c] = 0.0;
+  }
+
   void light_at(std::int32_t point, double out[3]) const {
     for (int c = 0; c < 3; ++c) {
       const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point) + c] : 1.0f;

@@ -18,7 +18,8 @@ void Shading::validate(const char* call, std::size_t point_count) const {
   require(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z),
           where + ".light_direction is not finite; expected a direction or the zero vector (headlight)");
   if (model != LightingModel::light_volume) return;
-  require(light_rgb != nullptr, where + ": model light_volume needs light_rgb (3 values per point)");
+  if (light_at) return;
+  require(light_rgb != nullptr, where + ": model light_volume needs light_rgb (3 values per point) or light_at");
   require(light_rgb->size() == 3 * point_count,
           where + ".light_rgb has " + std::to_string(light_rgb->size()) + " values but the mesh has " +
               std::to_string(point_count) + " points; expected 3 per point");

@@ -1,6 +1,7 @@
 // Shading of the emitted colour (penumbra/render/shading.h) against closed forms.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 #include "penumbra/core/error.h"
@@ -96,6 +97,43 @@ TEST(Shading, LightLinearAlongTheRayMatchesClosedForm) {
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(img.pixel(x, y)[c], expect, kPixelTolerance) << x << "," << y;
     }
   EXPECT_GT(inside, 200);
+}
+
+TEST(Shading, ImageSpaceLightAgreesWithPointLightWhereBothAreExact) {
+  // L(x) = (z, 1 - z/2, 1): linear, so interpolating it from the points and evaluating it at
+  // every segment end give the same segments, hence the same picture; only the path differs.
+  const auto owned = fixtures::block(BlockCells::tets, 5, 5, 5, {0, 0, 0}, {1, 1, 1});
+  const auto mesh = test::prepare(owned);
+  render::CpuRayCaster caster(mesh);
+  const auto values = fixtures::sample(owned, [](double x, double y, double z) { return x + 0.4 * y - 0.3 * z; });
+  const std::vector<float> scalars(values.begin(), values.end());
+  render::TransferFunction tf;
+  tf.colors = {{-0.3, 0.9, 0.2, 0.1}, {1.4, 0.1, 0.6, 0.9}};
+  tf.opacities = {{-0.3, 0.6}, {1.4, 2.0}};
+  std::vector<float> light(3 * mesh->points.size());
+  for (std::size_t i = 0; i < mesh->points.size(); ++i) {
+    const double z = mesh->points[i].z;
+    light[3 * i] = static_cast<float>(z);
+    light[3 * i + 1] = static_cast<float>(1 - 0.5 * z);
+    light[3 * i + 2] = 1.0f;
+  }
+  const auto cam = render::Camera::orbit(mesh->bounds, 40, 30, 35, 32, 32);
+  render::RenderOptions by_points = full_integral();
+  by_points.shading = light_only(light);
+  render::RenderOptions by_samples = by_points;
+  by_samples.shading.light_rgb = nullptr;
+  std::atomic<long> calls{0};
+  by_samples.shading.light_at = [&calls](const Vec3d& x, double rgb[3]) {
+    ++calls;
+    rgb[0] = x.z;
+    rgb[1] = 1 - 0.5 * x.z;
+    rgb[2] = 1;
+  };
+  const render::Image a = caster.render(scalars, tf, cam, by_points);
+  const render::Image b = caster.render(scalars, tf, cam, by_samples);
+  // Float light values per point against doubles per sample: 1e-6 covers the difference.
+  for (std::size_t i = 0; i < a.rgba.size(); ++i) EXPECT_NEAR(a.rgba[i], b.rgba[i], 1e-6) << i;
+  EXPECT_GT(calls.load(), 32 * 32);  // evaluated along the rays, not per pixel
 }
 
 // One pixel looking straight down -z at a block whose scalar is x (normal +-x).

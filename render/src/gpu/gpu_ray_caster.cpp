@@ -207,6 +207,8 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   require(opacity > 0 && opacity <= 1, "GpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
                                            "; expected a value in (0, 1]");
   options.shading.validate("GpuRayCaster::render", m.mesh->points.size());
+  require(!options.shading.light_at, "GpuRayCaster::render: image-space light (Shading::light_at) is evaluated by the "
+                                     "CPU ray caster only; give a per-point light_rgb instead");
   const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf);
 
   GpuDevice::Impl& d = m.dev();

@@ -1,6 +1,7 @@
 // render/include/penumbra/render/shading.h -- how samples are lit: emission only, gradient
 // Phong, or Phong times a light volume L(x) (Shih, Zhang & Ma, eq. 3)
 #pragma once
+#include <functional>
 #include <vector>
 
 #include "penumbra/core/vec3.h"
@@ -20,9 +21,12 @@ enum class LightingModel {
 /// either factor is constant and otherwise differs by O(segment length^2) of the change in L.
 struct Shading {
   LightingModel model = LightingModel::none;
-  /// Light colour field L, 3 floats (r, g, b) per mesh point; required for light_volume and
-  /// ignored otherwise. Non-finite values count as no light (0).
+  /// Light colour field L, 3 floats (r, g, b) per mesh point; for light_volume (this or
+  /// light_at) and ignored otherwise. Non-finite values count as no light (0).
   const std::vector<float>* light_rgb = nullptr;
+  /// Image-space light: L at any point x, written to rgb; when set it replaces light_rgb and is
+  /// evaluated at every segment end of every ray (CPU ray caster only). Called concurrently.
+  std::function<void(const Vec3d& x, double rgb[3])> light_at;
   /// Unit direction towards the key light for the diffuse and specular terms, in world space;
   /// the zero vector means a headlight (towards the eye, per ray).
   Vec3d light_direction{0, 0, 0};
