@@ -320,7 +320,10 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
       oc.attenuation = number(*a, child(op, "attenuation"));
       if (oc.attenuation <= 0) fail(child(op, "attenuation"), "must be > 0");
     }
-    if (const json* sp = find(*o, "space")) oc.volume = choice(*sp, child(op, "space"), {"points", "volume"}) == "volume";
+    if (const json* sp = find(*o, "space")) {
+      const std::string v = choice(*sp, child(op, "space"), {"points", "volume", "image"});
+      oc.space = v == "volume" ? OcclusionSpace::volume : (v == "image" ? OcclusionSpace::image : OcclusionSpace::points);
+    }
     if (const json* r = find(*o, "volume_resolution"))
       oc.volume_resolution = static_cast<int>(integer(*r, child(op, "volume_resolution"), 2, 1024));
     if (const json* sh = find(*o, "shadows")) {

@@ -199,6 +199,15 @@ Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   if (m_config.backend == Backend::automatic) m_config.cpu_fallback = true;
+  if (m_config.lighting && m_config.lighting->occlusion_model &&
+      m_config.lighting->occlusion.space == OcclusionSpace::image) {
+    // Image-space occlusion is evaluated along every ray, by the CPU ray caster.
+    if (m_config.backend == Backend::gpu)
+      throw Error(ErrorCode::backend_unavailable,
+                  "config: lighting.occlusion.space \"image\" is evaluated by the CPU backend only; use backend "
+                  "\"cpu\" or \"auto\", or space \"points\" or \"volume\"");
+    m_config.backend = Backend::cpu;
+  }
   m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);
@@ -366,10 +375,16 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, s
   std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
   for (const CameraEntry& cam : m_mesh->cameras) {
     if (lit(m_config) && m_config.lighting->occlusion_model) {
-      // Occlusion looks towards the viewer: one light field per camera.
-      const auto t_occ = Clock::now();
-      options.shading.light_rgb = &m_mesh->occlusions[index]->light_rgb(cam.camera.eye);
-      m_last_step.light_ms += ms_since(t_occ);
+      // Occlusion looks towards the viewer: one light field per camera (or, in image space, a
+      // light evaluated along every ray).
+      OcclusionLighting& occ = *m_mesh->occlusions[index];
+      if (m_config.lighting->occlusion.space == OcclusionSpace::image) {
+        options.shading.light_at = occ.light_at(cam.camera.eye);
+      } else {
+        const auto t_occ = Clock::now();
+        options.shading.light_rgb = &occ.light_rgb(cam.camera.eye);
+        m_last_step.light_ms += ms_since(t_occ);
+      }
     }
     const auto t0 = Clock::now();
     const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera, options)

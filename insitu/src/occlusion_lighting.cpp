@@ -22,12 +22,19 @@ OcclusionLighting::OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh
       m_resampler(m_mesh, config.grid_resolution) {}
 
 void OcclusionLighting::set_field(const std::vector<float>& scalars, const render::TransferFunction& tf) {
+  m_ao_tracer.reset();
+  m_shadow_tracer.reset();
   m_pyramid = render::ExtinctionPyramid(m_resampler.resample(scalars, tf));
+  render::ConeOptions ao = render::ConeOptions::occlusion(m_config.aperture_deg, m_config.splits);
+  ao.attenuation = m_config.attenuation;
+  m_ao_tracer = std::make_unique<render::ConeTracer>(m_pyramid, ao);
   m_shadow_rgb.clear();
   if (!m_config.shadows || m_lights.empty()) return;
   render::ConeOptions so = render::ConeOptions::shadow(m_config.shadow_aperture_deg, m_config.shadow_splits);
   so.attenuation = m_config.attenuation;
-  const render::ConeTracer tracer(m_pyramid, so);
+  m_shadow_tracer = std::make_unique<render::ConeTracer>(m_pyramid, so);
+  if (m_config.space == OcclusionSpace::image) return;  // evaluated per sample instead
+  const render::ConeTracer& tracer = *m_shadow_tracer;
   m_shadow_rgb.assign(3 * m_mesh->points.size(), 0.0f);
   for (const render::Light& light : m_lights) {
     const render::ShadowLight sl = shadow_light(light);
@@ -39,12 +46,10 @@ void OcclusionLighting::set_field(const std::vector<float>& scalars, const rende
 }
 
 const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) {
-  render::ConeOptions ao = render::ConeOptions::occlusion(m_config.aperture_deg, m_config.splits);
-  ao.attenuation = m_config.attenuation;
-  const render::ConeTracer tracer(m_pyramid, ao);
+  const render::ConeTracer& tracer = *m_ao_tracer;
   auto occlusion = [&](const Vec3d& x) { return render::directional_occlusion(tracer, x, eye); };
   std::vector<float> factor;
-  if (m_config.volume) {
+  if (m_config.space == OcclusionSpace::volume) {
     // Object space: the occlusion on a grid, sampled at the points (sec. 3.3.3).
     const render::PreIlluminationVolume volume(m_pyramid.bounds(), m_config.volume_resolution, occlusion);
     factor = render::evaluate_at_points(*m_mesh, [&](const Vec3d& x) { return volume.sample(x); });
@@ -56,6 +61,21 @@ const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) {
     for (int c = 0; c < 3; ++c)
       m_rgb[3 * p + c] = factor[p] * (m_shadow_rgb.empty() ? 1.0f : m_shadow_rgb[3 * p + c]);
   return m_rgb;
+}
+
+std::function<void(const Vec3d&, double[3])> OcclusionLighting::light_at(const Vec3d& eye) const {
+  return [this, eye](const Vec3d& x, double rgb[3]) {
+    const double ao = render::directional_occlusion(*m_ao_tracer, x, eye);
+    double light[3] = {1, 1, 1};
+    if (m_shadow_tracer) {
+      light[0] = light[1] = light[2] = 0;
+      for (const render::Light& l : m_lights) {
+        const double t = render::shadow_transmittance(*m_shadow_tracer, shadow_light(l), x);
+        for (int c = 0; c < 3; ++c) light[c] += t * l.color[static_cast<std::size_t>(c)];
+      }
+    }
+    for (int c = 0; c < 3; ++c) rgb[c] = ao * light[c];
+  };
 }
 
 }  // namespace penumbra::insitu

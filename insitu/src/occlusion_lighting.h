@@ -1,6 +1,7 @@
 // insitu/src/occlusion_lighting.h -- the light field of lighting model "occlusion": directional
 // ambient occlusion towards the camera times cone-traced shadows from the lights
 #pragma once
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -21,13 +22,18 @@ public:
   void set_field(const std::vector<float>& scalars, const render::TransferFunction& tf);
   /// The light field (3 floats per point) seen from `eye`.
   const std::vector<float>& light_rgb(const Vec3d& eye);
+  /// Image space: the same light evaluated at any point x (every sample of every ray), seen
+  /// from `eye`; valid until the next set_field.
+  std::function<void(const Vec3d&, double[3])> light_at(const Vec3d& eye) const;
 
 private:
+  double shadow_rgb_at(const Vec3d& x, int channel) const;
   std::shared_ptr<const render::TetMesh> m_mesh;
   OcclusionConfig m_config;
   std::vector<render::Light> m_lights;
   render::ExtinctionResampler m_resampler;
   render::ExtinctionPyramid m_pyramid;
+  std::unique_ptr<render::ConeTracer> m_ao_tracer, m_shadow_tracer;
   std::vector<float> m_shadow_rgb;  ///< sum_k colour_k shadow_k per point, 3 per point; empty: white
   std::vector<float> m_rgb;
 };

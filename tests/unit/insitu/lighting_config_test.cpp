@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "cinema_database.h"
 #include "config.h"
@@ -135,20 +136,21 @@ TEST(LightingConfig, OcclusionModelIsReadAndChecked) {
   EXPECT_EQ(o.aperture_deg, 20);
   EXPECT_EQ(o.splits, 7);
   EXPECT_EQ(o.grid_resolution, 32);
-  EXPECT_TRUE(o.volume);
+  EXPECT_EQ(o.space, OcclusionSpace::volume);
   EXPECT_EQ(o.volume_resolution, 16);
   EXPECT_FALSE(o.shadows);
   EXPECT_EQ(o.attenuation, 0.8);
   expect_config_error(R"({"model": "occlusion", "occlusion": {"splits": 5}})", "lighting.occlusion.splits must be 1, 3 or 7");
   expect_config_error(R"({"model": "occlusion", "occlusion": {"aperture": 90}})", "lighting.occlusion.aperture must be in (0, 90)");
-  expect_config_error(R"({"model": "occlusion", "occlusion": {"space": "image"}})", "lighting.occlusion.space must be one of");
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"space": "sky"}})", "lighting.occlusion.space must be one of");
   expect_config_error(R"({"model": "occlusion", "occlusion": {"shadows": 1}})", "lighting.occlusion.shadows must be true or false");
 }
 
 TEST(LightingConfig, OcclusionStepsAreDarkerWhereTheVolumeHidesTheViewer) {
   TempDir tmp;
   const auto plain = run_step(tmp / "plain", R"({"model": "none"})");
-  for (const char* space : {"points", "volume"}) {
+  std::map<std::string, double> brightness;
+  for (const char* space : {"points", "volume", "image"}) {
     const std::string dir = tmp / (std::string("occ-") + space);
     const auto occ = run_step(dir, std::string(R"({"model": "occlusion", "phong": {"ambient": 1, "diffuse": 0, "specular": 0},
         "lights": [{"type": "directional", "direction": [1, 0, 0]}],
@@ -158,6 +160,19 @@ TEST(LightingConfig, OcclusionStepsAreDarkerWhereTheVolumeHidesTheViewer) {
     const double b_plain = mean_brightness(tmp / "plain", plain[1]), b_occ = mean_brightness(dir, occ[1]);
     EXPECT_LT(b_occ, 0.95 * b_plain) << space;
     EXPECT_GT(b_occ, 0.05 * b_plain) << space;
+    brightness[space] = b_occ;
+  }
+  // The three evaluate the same cones, at points, on a grid or along the rays: the pictures differ
+  // only by how the occlusion is interpolated.
+  EXPECT_NEAR(brightness["image"], brightness["points"], 0.15 * brightness["points"]);
+  EXPECT_NEAR(brightness["volume"], brightness["points"], 0.15 * brightness["points"]);
+  try {
+    Context ctx(parse_config(with_lighting(tmp / "gpu-image", R"({"model": "occlusion", "occlusion": {"space": "image"}})",
+                                           R"(, "backend": "gpu")")));
+    ADD_FAILURE() << "expected backend_unavailable";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::backend_unavailable);
+    EXPECT_NE(std::string(e.what()).find("CPU backend only"), std::string::npos) << e.what();
   }
 }
 
