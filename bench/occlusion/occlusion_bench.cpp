@@ -13,6 +13,7 @@
 //   ao-points:  the cone transparency towards the eye at every mesh point (image-space evaluation
 //               per point; per-sample evaluation needs the renderer to call it),
 //   ao-object:  the same, precomputed on a pre-illumination volume and sampled at the points,
+//   ao-image:   the same cones traced at every segment end of every ray (scenes up to 200k tets),
 //   ao+shadow:  ao-object times a 2-degree cone towards a directional light,
 // and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones.
 // Hard shadows, against the image lit by the exact single-ray transmittance to the light:
@@ -322,6 +323,18 @@ int run(int argc, char** argv) {
         },
         image);
     emit("ao-object", splits, t, image, with_mc ? &mc_ao_image : nullptr);
+    // Image space: the cones traced at every segment end of every ray (a cone per tet step, so
+    // only on the smaller scenes).
+    if (mesh.tets.size() <= 200000) {
+      t = timed(
+          [&] {
+            pr::RenderOptions o = lit;
+            o.shading.light_at = [&](const Vec3d& x, double rgb[3]) { rgb[0] = rgb[1] = rgb[2] = ao(x); };
+            return caster.render(s.scalars, s.tf, s.camera, o);
+          },
+          image);
+      emit("ao-image", splits, t, image, with_mc ? &mc_ao_image : nullptr);
+    }
   }
   t = timed(
       [&] {
