@@ -21,6 +21,7 @@
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "frame_report.h"
 #include "scene_views.h"
 
 namespace pb = penumbra::bench;
@@ -83,20 +84,8 @@ int run(int argc, char** argv) {
   const pr::Camera cam = pb::camera(scene);
 
   const std::string ref_path = pb::reference_path(scene, data_dir);
-  std::vector<unsigned char> reference;
   double reference_ms = -1;
-  if (!std::filesystem::exists(ref_path)) {
-    std::fprintf(stderr, "pnb_bench_gpu_penumbra: computing the reference image %s (cached afterwards)\n", ref_path.c_str());
-    pb::Stopwatch ref_clock;
-    reference = pr::to_rgb8(pr::render_reference(*mesh, scene.scalars, tf, cam), scene.background);
-    reference_ms = ref_clock.ms();
-    std::filesystem::create_directories(std::filesystem::path(ref_path).parent_path());
-    pr::write_png(ref_path, reference, scene.width, scene.height);
-  } else {
-    int w = 0, h = 0;
-    reference = pr::read_png_rgb(ref_path, w, h);
-    penumbra::require(w == scene.width && h == scene.height, "reference '" + ref_path + "' has the wrong size");
-  }
+  const std::vector<unsigned char> reference = pb::reference_image(scene, *mesh, data_dir, false, reference_ms);
 
   pr::Image gpu_image, cpu_image;
   std::fprintf(stderr, "pnb_bench_gpu_penumbra: %s penumbra-gpu, %d frames\n", tag.c_str(), frames);
@@ -112,29 +101,11 @@ int run(int argc, char** argv) {
 
   const auto gpu_rgb = pr::to_rgb8(gpu_image, scene.background);
   const auto cpu_rgb = pr::to_rgb8(cpu_image, scene.background);
-  std::filesystem::create_directories(data_dir + "/images");
   const pr::GpuMemoryStats mem = gpu.memory();
   const pr::GpuDeviceInfo& info = device->info();
   auto line = [&](const char* renderer, const std::vector<double>& times, const std::vector<unsigned char>& rgb) {
-    const std::string image_path = data_dir + "/images/" + tag + "-" + renderer + ".png";
-    pr::write_png(image_path, rgb, scene.width, scene.height);
-    const pb::ImageError err = pb::compare_rgb8(rgb, reference);
-    nlohmann::ordered_json j;
-    j["bench"] = "gpu";
-    j["scene"] = scene.name;
-    j["scene_kind"] = scene.kind;
-    j["renderer"] = renderer;
-    j["tets"] = scene.tet_count();
-    j["points"] = scene.point_count();
-    j["width"] = scene.width;
-    j["height"] = scene.height;
-    j["frames"] = frames;
-    j["ms_per_frame"] = pb::rounded(pb::median(times));
-    j["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
-    j["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
-    j["max_abs_error"] = err.max_abs;
-    j["bad_pixels"] = err.bad_pixels;
-    return j;
+    return pb::frame_line("gpu", renderer, scene, times, rgb, reference,
+                          data_dir + "/images/" + tag + "-" + renderer + ".png");
   };
   nlohmann::ordered_json g = line("penumbra-gpu", gpu_times, gpu_rgb);
   const pb::ImageError vs_cpu = pb::compare_rgb8(gpu_rgb, cpu_rgb);
@@ -153,7 +124,6 @@ int run(int argc, char** argv) {
   if (reference_ms >= 0) g["reference_ms"] = pb::rounded(reference_ms, 1);
   g["reference"] = ref_path;
   g["load_avg"] = pb::load_average();
-  g["image"] = data_dir + "/images/" + tag + "-penumbra-gpu.png";
   nlohmann::ordered_json c = line("penumbra-cpu", cpu_times, cpu_rgb);
   c["device"] = "cpu";
   c["threads"] = penumbra::worker_count();
@@ -161,7 +131,6 @@ int run(int argc, char** argv) {
   c["prepare_ms"] = pb::rounded(cpu_prepare_ms, 1);
   c["reference"] = ref_path;
   c["load_avg"] = pb::load_average();
-  c["image"] = data_dir + "/images/" + tag + "-penumbra-cpu.png";
   std::cout << g.dump() << "\n" << c.dump() << std::endl;
   return 0;
 }

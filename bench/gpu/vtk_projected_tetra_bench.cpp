@@ -37,6 +37,7 @@
 #include "penumbra/core/error.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "frame_report.h"
 #include "vtk_scene.h"
 
 namespace pb = penumbra::bench;
@@ -119,11 +120,8 @@ int run(int argc, char** argv) {
   }
   const std::string tag = scene.name + (size.empty() ? "" : "-" + size);
   const std::string ref_path = pb::reference_path(scene, data_dir);
-  penumbra::require(std::filesystem::exists(ref_path),
-                    "pnb_bench_gpu_vtk: reference image '" + ref_path + "' is missing (pnb_bench_gpu_penumbra writes it)");
-  int rw = 0, rh = 0;
-  const std::vector<unsigned char> reference = pr::read_png_rgb(ref_path, rw, rh);
-  penumbra::require(rw == scene.width && rh == scene.height, "pnb_bench_gpu_vtk: reference has the wrong size");
+  const std::vector<unsigned char> reference =
+      pb::cached_reference(scene, data_dir, "pnb_bench_gpu_vtk", "pnb_bench_gpu_penumbra");
 
   const vtkSmartPointer<vtkUnstructuredGrid> grid = pb::make_grid(scene);
   vtkNew<vtkProjectedTetrahedraMapper> mapper;
@@ -157,30 +155,12 @@ int run(int argc, char** argv) {
     times.push_back(clock.ms());
   }
   const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
-  const std::string image_path = data_dir + "/images/" + tag + "-vtk-projected-tetra.png";
-  std::filesystem::create_directories(data_dir + "/images");
-  pr::write_png(image_path, rgb, scene.width, scene.height);
-  const pb::ImageError err = pb::compare_rgb8(rgb, reference);
-  nlohmann::ordered_json line;
-  line["bench"] = "gpu";
-  line["scene"] = scene.name;
-  line["scene_kind"] = scene.kind;
-  line["renderer"] = "vtk-projected-tetra";
-  line["tets"] = scene.tet_count();
-  line["points"] = scene.point_count();
-  line["width"] = scene.width;
-  line["height"] = scene.height;
-  line["frames"] = frames;
-  line["ms_per_frame"] = pb::rounded(pb::median(times));
-  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
-  line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
-  line["max_abs_error"] = err.max_abs;
-  line["bad_pixels"] = err.bad_pixels;
+  nlohmann::ordered_json line = pb::frame_line("gpu", "vtk-projected-tetra", scene, times, rgb, reference,
+                                               data_dir + "/images/" + tag + "-vtk-projected-tetra.png");
   line["device"] = renderer_string(window);
   line["first_frame_ms"] = pb::rounded(first_ms, 1);
   line["load_avg"] = pb::load_average();
   line["reference"] = ref_path;
-  line["image"] = image_path;
   std::cout << line.dump() << std::endl;
   return 0;
 }

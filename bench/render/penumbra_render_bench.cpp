@@ -18,6 +18,7 @@
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "frame_report.h"
 #include "scene_views.h"
 
 namespace pb = penumbra::bench;
@@ -50,20 +51,8 @@ int run(int argc, char** argv) {
 
   // The reference takes minutes at 1M tets; it depends only on the scene, so it is cached.
   const std::string ref_path = pb::reference_path(scene, data_dir);
-  std::vector<unsigned char> reference;
   double reference_ms = -1;
-  if (refresh || !std::filesystem::exists(ref_path)) {
-    pb::Stopwatch ref_clock;
-    const pr::Image ref = pr::render_reference(*mesh, scene.scalars, tf, cam);
-    reference_ms = ref_clock.ms();
-    reference = pr::to_rgb8(ref, scene.background);
-    std::filesystem::create_directories(std::filesystem::path(ref_path).parent_path());
-    pr::write_png(ref_path, reference, scene.width, scene.height);
-  } else {
-    int w = 0, h = 0;
-    reference = pr::read_png_rgb(ref_path, w, h);
-    penumbra::require(w == scene.width && h == scene.height, "reference '" + ref_path + "' has the wrong size");
-  }
+  const std::vector<unsigned char> reference = pb::reference_image(scene, *mesh, data_dir, refresh, reference_ms);
 
   pr::Image image = caster.render(scene.scalars, tf, cam);  // warm-up: first touch of caches and pages
   std::vector<double> times;
@@ -73,33 +62,14 @@ int run(int argc, char** argv) {
     times.push_back(frame_clock.ms());
   }
   const std::vector<unsigned char> rgb = pr::to_rgb8(image, scene.background);
-  const std::string image_path = data_dir + "/images/" + scene.name + "-penumbra-cpu.png";
-  std::filesystem::create_directories(data_dir + "/images");
-  pr::write_png(image_path, rgb, scene.width, scene.height);
-  const pb::ImageError err = pb::compare_rgb8(rgb, reference);
-
-  nlohmann::ordered_json line;
-  line["bench"] = "render";
-  line["scene"] = scene.name;
-  line["scene_kind"] = scene.kind;
-  line["renderer"] = "penumbra-cpu";
-  line["tets"] = scene.tet_count();
-  line["points"] = scene.point_count();
-  line["width"] = scene.width;
-  line["height"] = scene.height;
-  line["frames"] = frames;
-  line["ms_per_frame"] = pb::rounded(pb::median(times));
-  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
-  line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
-  line["max_abs_error"] = err.max_abs;
-  line["bad_pixels"] = err.bad_pixels;
+  nlohmann::ordered_json line = pb::frame_line("render", "penumbra-cpu", scene, times, rgb, reference,
+                                               data_dir + "/images/" + scene.name + "-penumbra-cpu.png");
   line["threads"] = penumbra::worker_count();
   line["load_ms"] = pb::rounded(load_ms, 1);
   line["prepare_ms"] = pb::rounded(prepare_ms, 1);
   if (reference_ms >= 0) line["reference_ms"] = pb::rounded(reference_ms, 1);
   line["reference"] = ref_path;
   line["load_avg"] = pb::load_average();
-  line["image"] = image_path;
   std::cout << line.dump() << std::endl;
   return 0;
 }

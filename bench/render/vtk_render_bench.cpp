@@ -40,6 +40,7 @@
 #include "penumbra/core/error.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "frame_report.h"
 #include "vtk_scene.h"
 
 namespace pb = penumbra::bench;
@@ -155,31 +156,11 @@ nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid*
                  times.back());
   }
   const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
-  const std::string image_path = data_dir + "/images/" + scene.name + "-" + renderer + ".png";
-  std::filesystem::create_directories(data_dir + "/images");
-  pr::write_png(image_path, rgb, scene.width, scene.height);
-  nlohmann::ordered_json line;
-  line["bench"] = "render";
-  line["scene"] = scene.name;
-  line["scene_kind"] = scene.kind;
-  line["renderer"] = renderer;
-  line["tets"] = scene.tet_count();
-  line["points"] = scene.point_count();
-  line["width"] = scene.width;
-  line["height"] = scene.height;
-  line["frames"] = frames;
-  line["ms_per_frame"] = pb::rounded(pb::median(times));
-  line["ms_min"] = pb::rounded(*std::min_element(times.begin(), times.end()));
-  if (!reference.empty()) {
-    const pb::ImageError err = pb::compare_rgb8(rgb, reference);
-    line["rms_error_pct"] = pb::rounded(pr::rms_difference_pct(rgb, reference), 4);
-    line["max_abs_error"] = err.max_abs;
-    line["bad_pixels"] = err.bad_pixels;
-  }
+  nlohmann::ordered_json line = pb::frame_line("render", renderer, scene, times, rgb, reference,
+                                               data_dir + "/images/" + scene.name + "-" + renderer + ".png");
   line["integrator"] = linear_integrator ? "vtkUnstructuredGridLinearRayIntegrator" : "default";
   line["first_frame_ms"] = pb::rounded(first_ms, 1);
   line["load_avg"] = pb::load_average();
-  line["image"] = image_path;
   return line;
 }
 
@@ -195,17 +176,11 @@ int run(int argc, char** argv) {
                     "pnb_bench_render_vtk: --integrator '" + integrator + "', expected linear or default");
 
   const pb::Scene scene = pb::load_scene(name, data_dir);
-  const std::string ref_path = pb::reference_path(scene, data_dir);
   // Without a reference (only with --no-reference 1, for checking set-ups) errors are left out.
   const bool no_reference = pb::option(argc, argv, "no-reference", "0") != "0";
-  std::vector<unsigned char> reference;
-  if (!no_reference) {
-    penumbra::require(std::filesystem::exists(ref_path), "pnb_bench_render_vtk: reference image '" + ref_path +
-                                                             "' is missing (pnb_bench_render_penumbra writes it)");
-    int w = 0, h = 0;
-    reference = pr::read_png_rgb(ref_path, w, h);
-    penumbra::require(w == scene.width && h == scene.height, "pnb_bench_render_vtk: reference has the wrong size");
-  }
+  const std::vector<unsigned char> reference =
+      no_reference ? std::vector<unsigned char>{}
+                   : pb::cached_reference(scene, data_dir, "pnb_bench_render_vtk", "pnb_bench_render_penumbra");
 
   const vtkSmartPointer<vtkUnstructuredGrid> grid = pb::make_grid(scene);
   std::stringstream list(renderers);
