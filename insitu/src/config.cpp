@@ -429,7 +429,6 @@ Config parse_document(const json& j) {
   if (const json* b = find(j, "backend")) {
     const std::string s = choice(*b, "backend", {"cpu", "gpu", "auto"});
     c.backend = s == "cpu" ? Backend::cpu : (s == "gpu" ? Backend::gpu : Backend::automatic);
-    c.cpu_fallback = c.backend == Backend::automatic;
   }
   if (const json* l = find(j, "lighting")) c.lighting = parse_lighting(*l, "lighting");
   if (const json* st = find(j, "store")) c.store = parse_store(*st, "store");

@@ -117,8 +117,6 @@ struct Config {
   /// Present when the config has a "lighting" object: the database then gets a lighting column.
   std::optional<LightingConfig> lighting;
   std::optional<StoreConfig> store;
-  /// Set for "auto": a mesh the GPU cannot hold (device memory) is rendered on the CPU instead.
-  bool cpu_fallback = false;
 
   /// True when `name` is rendered by at least one field entry.
   bool uses_field(const std::string& name) const;

@@ -198,7 +198,7 @@ struct Context::PreparedMesh {
 Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
-  if (m_config.backend == Backend::automatic) m_config.cpu_fallback = true;
+  m_cpu_fallback = m_config.backend == Backend::automatic;
   if (m_config.lighting && m_config.lighting->occlusion_model &&
       m_config.lighting->occlusion.space == OcclusionSpace::image) {
     // Image-space occlusion is evaluated along every ray, by the CPU ray caster.
@@ -245,7 +245,7 @@ void Context::publish_mesh(const MeshView& mesh) {
     try {
       p->gpu_caster = std::make_unique<render::GpuRayCaster>(process_gpu_device(false), p->tets);
     } catch (const Error& e) {
-      if (!m_config.cpu_fallback || e.code() != ErrorCode::out_of_memory) throw;
+      if (!m_cpu_fallback || e.code() != ErrorCode::out_of_memory) throw;
       log_line(std::string("backend \"auto\": ") + e.what() + "; rendering this mesh on the CPU");
     }
   }
@@ -329,15 +329,31 @@ void Context::drop_borrowed_fields() {
     it = it->second.owned.empty() ? m_fields.erase(it) : std::next(it);
 }
 
-void Context::render_field(std::size_t index, double time, std::int64_t cycle, std::vector<CinemaDatabase::Row>& rows,
-                           double& render_ms) {
+void Context::StepFailures::add(const Error& e) {
+  text += (text.empty() ? "" : "; ") + std::string(e.what());
+  if (code == ErrorCode::ok) code = e.code();
+}
+
+void Context::StepFailures::rethrow() const {
+  if (code != ErrorCode::ok) throw Error(code, text);
+}
+
+const std::vector<float>& Context::field_values(std::size_t index, std::int64_t cycle, StepValues& values) const {
+  auto& v = values[index];
+  if (v) return *v;
   const FieldConfig& f = m_config.fields[index];
   auto it = m_fields.find(f.name);
   if (it == m_fields.end())
     throw Error(ErrorCode::invalid_operation, "pnb_execute: field '" + f.name + "' was not published for cycle " +
                                                   std::to_string(cycle) + " (call pnb_publish_field before pnb_execute)");
   // A held view stays valid: borrowed views are dropped after every execute, copied ones own their data.
-  const std::vector<float> scalars = point_scalars(m_mesh->view, it->second.view, f.mode, f.component);
+  return v.emplace(point_scalars(m_mesh->view, it->second.view, f.mode, f.component));
+}
+
+void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
+                           std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
+  const FieldConfig& f = m_config.fields[index];
+  const std::vector<float>& scalars = field_values(index, cycle, values);
   const render::TransferFunction tf = resolve_transfer_function(f, scalars, m_mesh->tets->bounds.diagonal());
   render::RenderOptions options;
   if (lit(m_config)) {
@@ -410,12 +426,12 @@ bool Context::execute(double time, std::int64_t cycle) {
     Context* c;
     ~DropBorrowed() { c->drop_borrowed_fields(); }
   } drop{this};
-  std::string failures;
-  ErrorCode first_code = ErrorCode::ok;
+  StepFailures failures;
+  StepValues values(m_config.fields.size());
   // The history is kept on its own cadence, whether or not this step renders.
-  if (m_store && m_store->records(cycle)) store_fields(time, cycle, failures, first_code);
+  if (m_store && m_store->records(cycle)) store_fields(time, cycle, values, failures);
   if (!m_trigger.fires(time, cycle)) {
-    if (first_code != ErrorCode::ok) throw Error(first_code, failures);
+    failures.rethrow();
     return false;
   }
 
@@ -426,11 +442,10 @@ bool Context::execute(double time, std::int64_t cycle) {
   m_last_step.light_ms = 0;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     try {
-      render_field(i, time, cycle, rows, render_ms);
+      render_field(i, time, cycle, values, rows, render_ms);
     } catch (const Error& e) {
       // One field failing must not cost the others their images.
-      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
-      if (first_code == ErrorCode::ok) first_code = e.code();
+      failures.add(e);
     }
   }
   // Only images that were completely written are listed.
@@ -439,20 +454,17 @@ bool Context::execute(double time, std::int64_t cycle) {
   m_last_step.images = static_cast<int>(rows.size());
   m_last_step.render_ms = render_ms;
   m_last_step.total_ms = ms_since(t0);
-  if (first_code != ErrorCode::ok) throw Error(first_code, failures);
+  failures.rethrow();
   return true;
 }
 
-void Context::store_fields(double time, std::int64_t cycle, std::string& failures, ErrorCode& first_code) {
+void Context::store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures) {
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
-    const FieldConfig& f = m_config.fields[i];
-    auto it = m_fields.find(f.name);
-    if (it == m_fields.end()) continue;  // reported by the render step when it renders
+    if (m_fields.find(m_config.fields[i].name) == m_fields.end()) continue;  // reported when the step renders
     try {
-      m_store->record(m_field_labels[i], time, cycle, point_scalars(m_mesh->view, it->second.view, f.mode, f.component));
+      m_store->record(m_field_labels[i], time, cycle, field_values(i, cycle, values));
     } catch (const Error& e) {
-      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
-      if (first_code == ErrorCode::ok) first_code = e.code();
+      failures.add(e);
     }
   }
 }

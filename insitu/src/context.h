@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,16 +85,30 @@ private:
   };
   struct CameraEntry;
 
+  /// Errors of one step's fields, gathered so that a failing field costs the others nothing.
+  struct StepFailures {
+    std::string text;
+    ErrorCode code = ErrorCode::ok;
+    void add(const Error& e);
+    void rethrow() const;
+  };
+  /// Each config field's point values for this step, converted once for the store and the images.
+  using StepValues = std::vector<std::optional<std::vector<float>>>;
+
   void require_open(const char* call) const;
-  void render_field(std::size_t index, double time, std::int64_t cycle, std::vector<CinemaDatabase::Row>& rows,
-                    double& render_ms);
+  /// Point values of config field `index` this step; throws Error(invalid_operation) when the
+  /// field was not published.
+  const std::vector<float>& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
+  void render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
+                    std::vector<CinemaDatabase::Row>& rows, double& render_ms);
   void drop_borrowed_fields();
-  void store_fields(double time, std::int64_t cycle, std::string& failures, ErrorCode& first_code);
+  void store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures);
 
   Config m_config;
   Trigger m_trigger;
   std::unique_ptr<CinemaDatabase> m_database;
   std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
+  bool m_cpu_fallback = false;           ///< "auto": a mesh the GPU cannot hold renders on the CPU
   std::unique_ptr<PreparedMesh> m_mesh;
   std::map<std::string, HeldField> m_fields;
   std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry
