@@ -149,15 +149,6 @@ template <class Geometry>
 void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, const ShadeContext* shade,
                                       std::vector<Entry>& out) const {
   out.clear();
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  // Entries behind the origin matter only when the origin may be inside the mesh (the walk from
-  // such an entry reaches t = 0 inside); from outside the bounds every stretch inside the mesh
-  // lies wholly in front of or behind the origin.
-  const Bounds& b = mesh->bounds;
-  const double pad = 1e-9 * b.diagonal();
-  const Vec3d& o = f.origin;
-  const bool outside = o.x < b.lo.x - pad || o.y < b.lo.y - pad || o.z < b.lo.z - pad || o.x > b.hi.x + pad ||
-                       o.y > b.hi.y + pad || o.z > b.hi.z + pad;
   auto test_face = [&](std::int32_t i) {
     const BoundaryTriangle& tri = triangles[static_cast<std::size_t>(i)];
     Projected q[3];
@@ -178,13 +169,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     en.s = fp.mu[0] * geo.scalar(tri.v[0]) + fp.mu[1] * geo.scalar(tri.v[1]) + fp.mu[2] * geo.scalar(tri.v[2]);
     en.tet = tri.tet;
     en.face = tri.face;
-    if (shade != nullptr && shade->per_sample()) {
-      shade->light_at_position(f.origin + f.d * en.t, en.light);
-    } else if (shade != nullptr) {
-      double l[3][3];
-      for (int j = 0; j < 3; ++j) shade->light_at(tri.v[j], l[j]);
-      for (int c = 0; c < 3; ++c) en.light[c] = fp.mu[0] * l[0][c] + fp.mu[1] * l[1][c] + fp.mu[2] * l[2][c];
-    }
+    if (shade != nullptr) shade->face_light(tri.v, fp.mu, f.origin + f.d * en.t, en.light);
     out.push_back(en);
   };
   if constexpr (Geometry::kBinnedFaces) {
@@ -193,10 +178,18 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
       return sort_entries(out);
     }
   }
+  // Entries behind the origin matter only when the origin may be inside the mesh (the walk from
+  // such an entry reaches t = 0 inside); from outside the bounds every stretch inside the mesh
+  // lies wholly in front of or behind the origin.
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  const Bounds& b = mesh->bounds;
+  const double pad = 1e-9 * b.diagonal();
+  const Vec3d& o = f.origin;
+  const bool outside = o.x < b.lo.x - pad || o.y < b.lo.y - pad || o.z < b.lo.z - pad || o.x > b.hi.x + pad ||
+                       o.y > b.hi.y + pad || o.z > b.hi.z + pad;
   bvh.for_each_on_line(f.origin, f.d, outside ? 0.0 : -inf, inf, test_face);
   sort_entries(out);
 }
-
 
 // Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
 template <bool kShaded, class Geometry>
@@ -257,16 +250,8 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
       t_out = fp.t;
       s_out = fp.mu[0] * geo.scalar(id[0]) + fp.mu[1] * geo.scalar(id[x]) + fp.mu[2] * geo.scalar(id[y]);
       if constexpr (kShaded) {
-        if (shade->per_sample()) {
-          // Image space: the light at the segment's exit point itself.
-          shade->light_at_position(f.origin + f.d * t_out, l_out);
-        } else {
-          double ld[3], lx[3], ly[3];
-          shade->light_at(id[0], ld);
-          shade->light_at(id[x], lx);
-          shade->light_at(id[y], ly);
-          for (int c = 0; c < 3; ++c) l_out[c] = fp.mu[0] * ld[c] + fp.mu[1] * lx[c] + fp.mu[2] * ly[c];
-        }
+        const std::int32_t face[3] = {id[0], id[x], id[y]};
+        shade->face_light(face, fp.mu, f.origin + f.d * t_out, l_out);
       }
     } else if constexpr (kShaded) {
       for (int c = 0; c < 3; ++c) l_out[c] = l_in[c];

@@ -37,12 +37,18 @@ struct ShadeContext {
            shading.specular * std::pow(std::fabs(dot(normal, h)), shading.shininess);
   }
 
-  /// Image-space light (Shading::light_at) at x, when the shading has one.
-  bool per_sample() const { return static_cast<bool>(shading.light_at); }
-  void light_at_position(const Vec3d& x, double out[3]) const {
-    shading.light_at(x, out);
-    for (int c = 0; c < 3; ++c)
-      if (!std::isfinite(out[c])) out[c] = 0.0;
+  /// L at point x of a face with vertices `ids` and interpolation weights `mu`: evaluated at x in
+  /// image space (Shading::light_at), else interpolated from the vertices' light.
+  void face_light(const std::int32_t ids[3], const double mu[3], const Vec3d& x, double out[3]) const {
+    if (shading.light_at) {
+      shading.light_at(x, out);
+      for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(out[c])) out[c] = 0.0;
+      return;
+    }
+    double l[3][3];
+    for (int j = 0; j < 3; ++j) light_at(ids[j], l[j]);
+    for (int c = 0; c < 3; ++c) out[c] = mu[0] * l[0][c] + mu[1] * l[1][c] + mu[2] * l[2][c];
   }
 
   void light_at(std::int32_t point, double out[3]) const {
