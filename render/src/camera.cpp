@@ -59,15 +59,21 @@ Camera Camera::orbit(const Bounds& bounds, double phi_deg, double theta_deg, dou
   return look_at(bounds.center() + dir * distance, bounds.center(), up, fov_y_deg, width, height);
 }
 
+Camera::Frame Camera::frame() const {
+  Frame f;
+  f.forward = normalize(target - eye);
+  f.right = normalize(cross(f.forward, up));
+  f.up = cross(f.right, f.forward);
+  f.half_height = std::tan(0.5 * fov_y_deg * kDegree);
+  f.half_width = f.half_height * width / height;
+  return f;
+}
+
 Ray Camera::primary_ray(double px, double py) const {
-  const Vec3d forward = normalize(target - eye);
-  const Vec3d right = normalize(cross(forward, up));
-  const Vec3d true_up = cross(right, forward);
-  const double half_h = std::tan(0.5 * fov_y_deg * kDegree);
-  const double half_w = half_h * width / height;
-  const double x = (2.0 * (px + 0.5) / width - 1.0) * half_w;
-  const double y = (1.0 - 2.0 * (py + 0.5) / height) * half_h;
-  return {eye, normalize(forward + right * x + true_up * y)};
+  const Frame f = frame();
+  const double x = (2.0 * (px + 0.5) / width - 1.0) * f.half_width;
+  const double y = (1.0 - 2.0 * (py + 0.5) / height) * f.half_height;
+  return {eye, normalize(f.forward + f.right * x + f.up * y)};
 }
 
 }  // namespace penumbra::render

@@ -4,18 +4,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <numbers>
 
 #include "penumbra/core/thread_pool.h"
 
 namespace penumbra::render::detail {
 
 ScreenBasis screen_basis(const Camera& camera) {
+  const Camera::Frame f = camera.frame();
   ScreenBasis basis;
   basis.eye = camera.eye;
-  basis.forward = normalize(camera.target - camera.eye);
-  basis.right = normalize(cross(basis.forward, camera.up));
-  basis.down = cross(basis.forward, basis.right);
+  basis.forward = f.forward;
+  basis.right = f.right;
+  basis.down = -f.up;  // right x down = forward, as RayFrame's u x v = d
   return basis;
 }
 
@@ -43,8 +43,8 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
   // Pixel (px, py) looks through image-plane point X = (2 (px + 0.5) / W - 1) half_w, and
   // likewise for Y (down the screen): invert that for each face's corners.
-  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
-  const double half_w = half_h * camera.width / camera.height;
+  const Camera::Frame frame = camera.frame();
+  const double half_h = frame.half_height, half_w = frame.half_width;
   struct TileRange {
     int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
   };

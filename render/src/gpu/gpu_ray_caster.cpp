@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <numbers>
 #include <string>
 
 #include "gpu_device_impl.h"
@@ -235,11 +234,9 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   for (GLuint b = 0; b < kBindingCount; ++b) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, m.buffers[b]);
 
   // The camera of Camera::primary_ray, relative to the mesh centre like the points.
-  const Vec3d forward = normalize(camera.target - camera.eye);
-  const Vec3d right = normalize(cross(forward, camera.up));
-  const Vec3d up = cross(right, forward);
-  const double half_h = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
-  const double half_w = half_h * camera.width / camera.height;
+  const Camera::Frame frame = camera.frame();
+  const Vec3d &forward = frame.forward, &right = frame.right, &up = frame.up;
+  const double half_h = frame.half_height, half_w = frame.half_width;
   const Vec3d eye = camera.eye - m.center;
   const Bounds& bb = m.mesh->bounds;
   const double pad = 1e-9 * bb.diagonal();

@@ -22,6 +22,14 @@ struct Camera {
   /// xy-plane (degrees, -90..90). The eye sits on a sphere around the bounds' centre, far enough
   /// that the whole bounding sphere fits in the view.
   static Camera orbit(const Bounds& bounds, double phi_deg, double theta_deg, double fov_y_deg, int width, int height);
+  /// The camera's orthonormal frame (right x up = -forward) and the half extents of its image
+  /// plane one unit in front of the eye: pixel (px, py) looks along
+  /// forward + right x + up y, x = (2 (px + 0.5) / width - 1) half_width, y likewise downwards.
+  struct Frame {
+    Vec3d forward, right, up;
+    double half_width, half_height;
+  };
+  Frame frame() const;
   /// Unit-direction primary ray through the centre of pixel (px, py); py = 0 is the top row.
   Ray primary_ray(double px, double py) const;
 };
