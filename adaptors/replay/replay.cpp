@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "input_series.h"
+#include "step_range.h"
 #include "store_replay.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
@@ -28,9 +29,6 @@ struct Options {
   bool quiet = false;
 };
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 Options parse_args(const std::vector<std::string>& args) {
   Options o;
@@ -54,35 +52,6 @@ Options parse_args(const std::vector<std::string>& args) {
   o.config = positional[0];
   o.input = positional[1];
   return o;
-}
-
-std::size_t parse_index(const std::string& text, const std::string& spec) {
-  std::size_t used = 0;
-  long long v = -1;
-  try {
-    v = std::stoll(text, &used);
-  } catch (const std::exception&) {
-  }
-  if (used != text.size() || v < 0) throw UsageError("--steps " + spec + ": '" + text + "' is not a step index >= 0");
-  return static_cast<std::size_t>(v);
-}
-
-/// Half-open range [first, last) of step indices selected by "a:b", "a:", ":b" or "a".
-std::pair<std::size_t, std::size_t> step_range(const std::string& spec, std::size_t n) {
-  if (spec.empty()) return {0, n};
-  const auto colon = spec.find(':');
-  std::size_t first = 0, last = n;
-  if (colon == std::string::npos) {
-    first = parse_index(spec, spec);
-    last = first + 1;
-  } else {
-    if (colon > 0) first = parse_index(spec.substr(0, colon), spec);
-    if (colon + 1 < spec.size()) last = parse_index(spec.substr(colon + 1), spec);
-  }
-  if (first >= last || last > n)
-    throw UsageError("--steps " + spec + " selects no valid steps: INPUT has " + std::to_string(n) +
-                     " step(s), indices 0.." + std::to_string(n - 1) + " (a:b is half-open)");
-  return {first, last};
 }
 
 /// Field names the config renders, or nullopt when the config cannot be read here (the C API

@@ -10,6 +10,7 @@
 #include "penumbra/core/error.h"
 #include "penumbra/insitu/stored_run.h"
 #include "penumbra/penumbra.h"
+#include "step_range.h"
 
 namespace penumbra::replay {
 namespace {
@@ -46,26 +47,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
     return 1;
   }
   const std::size_t n = run->step_count();
-  std::size_t first = 0, last = n;
-  if (!steps.empty()) {
-    const auto colon = steps.find(':');
-    try {
-      if (colon == std::string::npos) {
-        first = std::stoull(steps);
-        last = first + 1;
-      } else {
-        if (colon > 0) first = std::stoull(steps.substr(0, colon));
-        if (colon + 1 < steps.size()) last = std::stoull(steps.substr(colon + 1));
-      }
-    } catch (const std::exception&) {
-      err << "penumbra-replay: --steps " << steps << ": expected a:b, a: , :b or a\n";
-      return 2;
-    }
-  }
-  if (first >= last || last > n) {
-    err << "penumbra-replay: --steps " << steps << " selects no valid steps: the store has " << n << " step(s)\n";
-    return 2;
-  }
+  const auto [first, last] = step_range(steps, n);
   if (!quiet)
     out << "penumbra-replay: stored run '" << path << "' (" << run->mesh().point_count() << " points, "
         << run->fields().size() << " field(s), " << n << " step(s)), replaying steps " << first << ".." << last - 1
