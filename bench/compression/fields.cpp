@@ -8,6 +8,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "penumbra/core/morton.h"
+
 namespace pnb_bench {
 
 double Field::range() const {
@@ -21,16 +23,6 @@ struct P {
   double x, y, z;
 };
 
-std::uint64_t spread_bits(std::uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
-}
-
 std::vector<P> morton_points(std::uint64_t n) {
   std::mt19937_64 rng(2026);
   std::uniform_real_distribution<double> u(0, 1);
@@ -38,7 +30,7 @@ std::vector<P> morton_points(std::uint64_t n) {
   for (auto& q : p) q = {u(rng), u(rng), u(rng)};
   auto key = [](const P& q) {
     const auto s = [](double c) { return std::uint64_t(c * 2097151.0); };
-    return spread_bits(s(q.x)) | spread_bits(s(q.y)) << 1 | spread_bits(s(q.z)) << 2;
+    return penumbra::spread_bits_3d(s(q.x)) | penumbra::spread_bits_3d(s(q.y)) << 1 | penumbra::spread_bits_3d(s(q.z)) << 2;
   };
   std::sort(p.begin(), p.end(), [&](const P& a, const P& b) { return key(a) < key(b); });
   return p;

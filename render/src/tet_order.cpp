@@ -4,23 +4,10 @@
 #include <algorithm>
 #include <utility>
 
+#include "penumbra/core/morton.h"
 #include "penumbra/core/thread_pool.h"
 
 namespace penumbra::render::detail {
-namespace {
-
-// Spreads the low 21 bits of x to every third bit.
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffull;
-  x = (x | x << 16) & 0x1f0000ff0000ffull;
-  x = (x | x << 8) & 0x100f00f00f00f00full;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-  x = (x | x << 2) & 0x1249249249249249ull;
-  return x;
-}
-
-}  // namespace
 
 std::vector<std::int32_t> morton_order(const TetMesh& m) {
   const Vec3d lo = m.bounds.lo, ext = m.bounds.hi - m.bounds.lo;
@@ -34,7 +21,7 @@ std::vector<std::int32_t> morton_order(const TetMesh& m) {
       std::uint64_t code = 0;
       for (int a = 0; a < 3; ++a) {
         const double g = std::clamp((c[a] * 0.25 - lo[a]) * scale[a], 0.0, 2097151.0);
-        code |= spread_bits(static_cast<std::uint64_t>(g)) << a;
+        code |= spread_bits_3d(static_cast<std::uint64_t>(g)) << a;
       }
       keyed[t] = {code, static_cast<std::int32_t>(t)};
     }
