@@ -342,15 +342,9 @@ const TetMesh& CpuRayCaster::mesh() const { return *m_impl->mesh; }
 
 Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) const {
-  detail::check_render_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf);
-  require(camera.width > 0 && camera.height > 0, "CpuRayCaster::render: camera image size " +
-                                                     std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                                                     "; expected positive width and height");
+  detail::check_frame_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf, camera, options);
   const double opacity = options.early_termination_opacity;
-  require(opacity > 0 && opacity <= 1, "CpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
-                                           "; expected a value in (0, 1]");
   const double stop_transmittance = opacity >= 1.0 ? 0.0 : 1.0 - opacity;
-  options.shading.validate("CpuRayCaster::render", m_impl->mesh->points.size());
   const TfTable table(tf);
   const bool shaded = options.shading.model != LightingModel::none;
   const ShadeContext shade = shaded ? detail::make_shade_context(m_impl->tets, m_impl->mesh->points, scalars.data(),

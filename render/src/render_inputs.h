@@ -1,9 +1,11 @@
-// render/src/render_inputs.h -- argument checks shared by the fast and the reference renderer
+// render/src/render_inputs.h -- argument checks shared by the CPU, GPU and reference renderers
 #pragma once
 #include <string>
 #include <vector>
 
 #include "penumbra/core/error.h"
+#include "penumbra/render/camera.h"
+#include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
@@ -17,6 +19,21 @@ inline void check_render_inputs(const char* call, const TetMesh& mesh, const std
                                                      " values but the mesh has " + std::to_string(mesh.points.size()) +
                                                      " points; expected one value per point");
   tf.validate();
+}
+
+/// check_render_inputs, and the frame's own arguments: a positive image size, an early
+/// termination opacity in (0, 1], valid shading.
+inline void check_frame_inputs(const char* call, const TetMesh& mesh, const std::vector<float>& scalars,
+                               const TransferFunction& tf, const Camera& camera, const RenderOptions& options) {
+  check_render_inputs(call, mesh, scalars, tf);
+  require(camera.width > 0 && camera.height > 0, std::string(call) + ": camera image size " +
+                                                     std::to_string(camera.width) + "x" +
+                                                     std::to_string(camera.height) +
+                                                     "; expected positive width and height");
+  const double opacity = options.early_termination_opacity;
+  require(opacity > 0 && opacity <= 1, std::string(call) + ": early_termination_opacity = " +
+                                           std::to_string(opacity) + "; expected a value in (0, 1]");
+  options.shading.validate(call, mesh.points.size());
 }
 
 }  // namespace penumbra::render::detail

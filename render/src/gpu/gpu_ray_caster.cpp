@@ -198,14 +198,8 @@ GpuRayCaster::~GpuRayCaster() {
 Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) {
   Impl& m = *m_impl;
-  detail::check_render_inputs("GpuRayCaster::render", *m.mesh, scalars, tf);
-  require(camera.width > 0 && camera.height > 0, "GpuRayCaster::render: camera image size " +
-                                                     std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                                                     "; expected positive width and height");
+  detail::check_frame_inputs("GpuRayCaster::render", *m.mesh, scalars, tf, camera, options);
   const double opacity = options.early_termination_opacity;
-  require(opacity > 0 && opacity <= 1, "GpuRayCaster::render: early_termination_opacity = " + std::to_string(opacity) +
-                                           "; expected a value in (0, 1]");
-  options.shading.validate("GpuRayCaster::render", m.mesh->points.size());
   require(!options.shading.light_at, "GpuRayCaster::render: image-space light (Shading::light_at) is evaluated by the "
                                      "CPU ray caster only; give a per-point light_rgb instead");
   const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf);
