@@ -39,6 +39,7 @@
 #include "scene.h"
 #include "frame_report.h"
 #include "vtk_scene.h"
+#include "vtk_window.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
@@ -66,25 +67,6 @@ vtkSmartPointer<vtkVolumeProperty> make_property(const pb::Scene& scene) {
   property->SetInterpolationTypeToLinear();
   property->ShadeOff();
   return property;
-}
-
-std::vector<unsigned char> read_back(vtkRenderWindow* window, int width, int height) {
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->ShouldRerenderOff();
-  grab->Update();
-  vtkImageData* img = grab->GetOutput();
-  int dims[3];
-  img->GetDimensions(dims);
-  penumbra::require(dims[0] == width && dims[1] == height, "pnb_bench_gpu_vtk: framebuffer has the wrong size");
-  auto* px = static_cast<unsigned char*>(img->GetScalarPointer());
-  std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
-  for (int y = 0; y < height; ++y)  // VTK's rows start at the bottom
-    std::copy(px + static_cast<std::size_t>(height - 1 - y) * width * 3, px + static_cast<std::size_t>(height - y) * width * 3,
-              rgb.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * width * 3));
-  return rgb;
 }
 
 // "llvmpipe (LLVM 15.0.6, 256 bits)" from the window's capability report.
@@ -126,23 +108,7 @@ int run(int argc, char** argv) {
   const vtkSmartPointer<vtkUnstructuredGrid> grid = pb::make_grid(scene);
   vtkNew<vtkProjectedTetrahedraMapper> mapper;
   mapper->SetInputData(grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(make_property(scene));
-  vtkNew<vtkRenderer> ren;
-  ren->SetBackground(scene.background[0], scene.background[1], scene.background[2]);
-  ren->AddVolume(volume);
-  vtkCamera* cam = ren->GetActiveCamera();
-  const pb::SceneCamera& c = scene.camera;
-  cam->SetPosition(c.eye.x, c.eye.y, c.eye.z);
-  cam->SetFocalPoint(c.target.x, c.target.y, c.target.z);
-  cam->SetViewUp(c.up.x, c.up.y, c.up.z);
-  cam->SetViewAngle(c.fov_y_deg);
-  ren->ResetCameraClippingRange();
-  vtkNew<vtkRenderWindow> window;
-  window->SetSize(scene.width, scene.height);
-  window->SetMultiSamples(0);
-  window->AddRenderer(ren);
+  const vtkSmartPointer<vtkRenderWindow> window = pb::scene_window(scene, mapper, make_property(scene));
 
   pb::Stopwatch first_clock;
   window->Render();
@@ -154,7 +120,7 @@ int run(int argc, char** argv) {
     window->Render();
     times.push_back(clock.ms());
   }
-  const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
+  const std::vector<unsigned char> rgb = pb::read_back(window, scene.width, scene.height, "pnb_bench_gpu_vtk");
   nlohmann::ordered_json line = pb::frame_line("gpu", "vtk-projected-tetra", scene, times, rgb, reference,
                                                data_dir + "/images/" + tag + "-vtk-projected-tetra.png");
   line["device"] = renderer_string(window);

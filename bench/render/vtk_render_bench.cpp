@@ -42,6 +42,7 @@
 #include "scene.h"
 #include "frame_report.h"
 #include "vtk_scene.h"
+#include "vtk_window.h"
 
 namespace pb = penumbra::bench;
 namespace pr = penumbra::render;
@@ -96,50 +97,12 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> make_mapper(const std::string& 
                         "pnb_bench_render_vtk: unknown renderer '" + renderer + "', expected vtk-raycast or vtk-zsweep");
 }
 
-// Reads the back buffer as 8-bit RGB, top row first (VTK's rows start at the bottom).
-std::vector<unsigned char> read_back(vtkRenderWindow* window, int width, int height) {
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->ShouldRerenderOff();
-  grab->Update();
-  vtkImageData* img = grab->GetOutput();
-  int dims[3];
-  img->GetDimensions(dims);
-  penumbra::require(dims[0] == width && dims[1] == height, "pnb_bench_render_vtk: framebuffer has the wrong size");
-  auto* px = static_cast<unsigned char*>(img->GetScalarPointer());
-  std::vector<unsigned char> rgb(static_cast<std::size_t>(width) * height * 3);
-  for (int y = 0; y < height; ++y)
-    std::copy(px + static_cast<std::size_t>(height - 1 - y) * width * 3, px + static_cast<std::size_t>(height - y) * width * 3,
-              rgb.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * width * 3));
-  return rgb;
-}
-
 nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid* grid, const std::string& renderer,
                                     bool linear_integrator, int frames, const std::vector<unsigned char>& reference,
                                     const std::string& data_dir) {
   auto mapper = make_mapper(renderer, linear_integrator);
   mapper->SetInputData(grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(make_property(scene));
-
-  vtkNew<vtkRenderer> ren;
-  ren->SetBackground(scene.background[0], scene.background[1], scene.background[2]);
-  ren->AddVolume(volume);
-  vtkCamera* cam = ren->GetActiveCamera();
-  const pb::SceneCamera& c = scene.camera;
-  cam->SetPosition(c.eye.x, c.eye.y, c.eye.z);
-  cam->SetFocalPoint(c.target.x, c.target.y, c.target.z);
-  cam->SetViewUp(c.up.x, c.up.y, c.up.z);
-  cam->SetViewAngle(c.fov_y_deg);
-  ren->ResetCameraClippingRange();
-
-  vtkNew<vtkRenderWindow> window;
-  window->SetSize(scene.width, scene.height);
-  window->SetMultiSamples(0);
-  window->AddRenderer(ren);
+  const vtkSmartPointer<vtkRenderWindow> window = pb::scene_window(scene, mapper, make_property(scene));
 
   // The first frame includes window creation and each mapper's per-mesh set-up.
   pb::Stopwatch first_clock;
@@ -155,7 +118,7 @@ nlohmann::ordered_json bench_mapper(const pb::Scene& scene, vtkUnstructuredGrid*
     std::fprintf(stderr, "pnb_bench_render_vtk: %s %s frame %d: %.1f ms\n", scene.name.c_str(), renderer.c_str(), f + 1,
                  times.back());
   }
-  const std::vector<unsigned char> rgb = read_back(window, scene.width, scene.height);
+  const std::vector<unsigned char> rgb = pb::read_back(window, scene.width, scene.height, "pnb_bench_render_vtk");
   nlohmann::ordered_json line = pb::frame_line("render", renderer, scene, times, rgb, reference,
                                                data_dir + "/images/" + scene.name + "-" + renderer + ".png");
   line["integrator"] = linear_integrator ? "vtkUnstructuredGridLinearRayIntegrator" : "default";
