@@ -4,25 +4,15 @@
 //
 // Usage: pnb_bench_gpu_vtk --scene NAME --data-dir DIR [--frames N] [--size WxH]
 // Debian's VTK renders through X11 only: run it under xvfb-run. Prints one JSON object.
-#include <vtkCamera.h>
-#include <vtkCellArray.h>
 #include <vtkColorTransferFunction.h>
-#include <vtkFloatArray.h>
-#include <vtkIdTypeArray.h>
-#include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkOpenGLRenderWindow.h>
 #include <vtkPiecewiseFunction.h>
-#include <vtkPointData.h>
-#include <vtkPoints.h>
 #include <vtkProjectedTetrahedraMapper.h>
 #include <vtkRenderWindow.h>
-#include <vtkRenderer.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkVolume.h>
 #include <vtkVolumeProperty.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <nlohmann/json.hpp>
 

@@ -5,28 +5,17 @@
 // Usage: pnb_bench_render_vtk --scene NAME --data-dir DIR [--frames N]
 //                             [--renderers vtk-raycast,vtk-zsweep] [--integrator linear|default]
 // Debian's VTK renders through X11 only: run it under xvfb-run. Prints one JSON object per mapper.
-#include <vtkCamera.h>
-#include <vtkCellArray.h>
 #include <vtkColorTransferFunction.h>
-#include <vtkFloatArray.h>
-#include <vtkIdTypeArray.h>
-#include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPiecewiseFunction.h>
-#include <vtkPointData.h>
-#include <vtkPoints.h>
 #include <vtkRenderWindow.h>
-#include <vtkRenderer.h>
 #include <vtkSmartPointer.h>
-#include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkUnstructuredGridLinearRayIntegrator.h>
 #include <vtkUnstructuredGridVolumeMapper.h>
 #include <vtkUnstructuredGridVolumeRayCastMapper.h>
 #include <vtkUnstructuredGridVolumeZSweepMapper.h>
-#include <vtkVolume.h>
 #include <vtkVolumeProperty.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <nlohmann/json.hpp>
 
