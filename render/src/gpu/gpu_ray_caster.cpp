@@ -72,14 +72,19 @@ struct GpuRayCaster::Impl {
   std::size_t triangle_count = 0;
   GLuint buffers[kBindingCount] = {};
   std::size_t capacity[kBindingCount] = {};
-  std::vector<float> uploaded_scalars;  ///< what the device holds, to send only changed blocks
-  bool scalars_on_device = false;
-  std::size_t last_upload = 0;
+  /// What a per-frame buffer holds on the device, so that only changed blocks are sent again.
+  struct Mirror {
+    std::vector<float> values;
+    bool valid = false;
+  };
+  Mirror scalars_held, light_held;
+  std::size_t last_upload = 0;  ///< field bytes sent by the last render
   GpuMemoryStats stats;
 
   GpuDevice::Impl& dev() const { return device->impl(); }
   void allocate(const GlApi& gl, Binding b, std::size_t bytes, const void* data);
-  void upload_scalars(const GlApi& gl, const std::vector<float>& scalars);
+  /// Sends to buffer `b` the blocks of `values` that differ from `held`; returns the bytes sent.
+  std::size_t upload_changed(const GlApi& gl, Binding b, const std::vector<float>& values, Mirror& held);
   GLint uniform(const GlApi& gl, const char* name) const { return gl.GetUniformLocation(dev().ray_cast_program, name); }
 };
 
@@ -100,34 +105,35 @@ void GpuRayCaster::Impl::allocate(const GlApi& gl, Binding b, std::size_t bytes,
   capacity[b] = bytes;
 }
 
-void GpuRayCaster::Impl::upload_scalars(const GlApi& gl, const std::vector<float>& scalars) {
-  last_upload = 0;
-  const std::size_t n = scalars.size();
-  if (!scalars_on_device) {
-    gl.NamedBufferSubData(buffers[kScalars], 0, static_cast<GLsizeiptr>(n * sizeof(float)), scalars.data());
-    uploaded_scalars = scalars;
-    scalars_on_device = true;
-    last_upload = n * sizeof(float);
-    return;
+std::size_t GpuRayCaster::Impl::upload_changed(const GlApi& gl, Binding binding, const std::vector<float>& values,
+                                               Mirror& held) {
+  const std::size_t n = values.size();
+  if (!held.valid || held.values.size() != n) {
+    gl.NamedBufferSubData(buffers[binding], 0, static_cast<GLsizeiptr>(n * sizeof(float)), values.data());
+    held.values = values;
+    held.valid = true;
+    return n * sizeof(float);
   }
   // Bitwise comparison (NaN == NaN here); runs of changed blocks go in one call.
+  std::size_t sent = 0;
   for (std::size_t b = 0; b < n;) {
     std::size_t e = std::min(n, b + kScalarBlock);
-    if (std::memcmp(&scalars[b], &uploaded_scalars[b], (e - b) * sizeof(float)) == 0) {
+    if (std::memcmp(&values[b], &held.values[b], (e - b) * sizeof(float)) == 0) {
       b = e;
       continue;
     }
     while (e < n) {
       const std::size_t e2 = std::min(n, e + kScalarBlock);
-      if (std::memcmp(&scalars[e], &uploaded_scalars[e], (e2 - e) * sizeof(float)) == 0) break;
+      if (std::memcmp(&values[e], &held.values[e], (e2 - e) * sizeof(float)) == 0) break;
       e = e2;
     }
-    gl.NamedBufferSubData(buffers[kScalars], static_cast<GLintptr>(b * sizeof(float)),
-                          static_cast<GLsizeiptr>((e - b) * sizeof(float)), &scalars[b]);
-    std::memcpy(&uploaded_scalars[b], &scalars[b], (e - b) * sizeof(float));
-    last_upload += (e - b) * sizeof(float);
+    gl.NamedBufferSubData(buffers[binding], static_cast<GLintptr>(b * sizeof(float)),
+                          static_cast<GLsizeiptr>((e - b) * sizeof(float)), &values[b]);
+    std::memcpy(&held.values[b], &values[b], (e - b) * sizeof(float));
+    sent += (e - b) * sizeof(float);
     b = e;
   }
+  return sent;
 }
 
 GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<const TetMesh> mesh)
@@ -208,7 +214,7 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   CurrentContext current(d);
   const GlApi& gl = current.gl();
   const GLuint program = d.ray_cast_program;
-  m.upload_scalars(gl, scalars);
+  m.last_upload = m.upload_changed(gl, kScalars, scalars, m.scalars_held);
   const std::size_t tf_bytes = table.data.size() * sizeof(float);
   if (m.capacity[kTf] < tf_bytes) m.allocate(gl, kTf, tf_bytes, nullptr);
   gl.NamedBufferSubData(m.buffers[kTf], 0, static_cast<GLsizeiptr>(tf_bytes), table.data.data());
@@ -217,10 +223,13 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   if (m.capacity[kPixels] < tile_bytes) m.allocate(gl, kPixels, tile_bytes, nullptr);
   const Shading& shading = options.shading;
   if (shading.model == LightingModel::light_volume) {
-    // The light field changes with every light update: sent whole (12 B per point).
+    // 12 B per point; the cameras of one step share it, so it is sent once per change.
     const std::size_t bytes = shading.light_rgb->size() * sizeof(float);
-    if (m.capacity[kLight] < bytes) m.allocate(gl, kLight, bytes, nullptr);
-    gl.NamedBufferSubData(m.buffers[kLight], 0, static_cast<GLsizeiptr>(bytes), shading.light_rgb->data());
+    if (m.capacity[kLight] < bytes) {
+      m.allocate(gl, kLight, bytes, nullptr);
+      m.light_held.valid = false;
+    }
+    m.upload_changed(gl, kLight, *shading.light_rgb, m.light_held);
   } else if (m.capacity[kLight] == 0) {
     m.allocate(gl, kLight, 16, nullptr);  // bound but unread
   }
