@@ -2,8 +2,8 @@
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $root, $build, $data
 # and $frames. Environment: PNB_BENCH_LIGHT_SCENE (holeblock-1m, the default, or grid-aligned),
 # PNB_BENCH_LIGHT_LEVELS (default "16 32 64 128 256"), PNB_BENCH_LIGHT_SAMPLES (reference
-# vertices, default 4000), PNB_BENCH_LIGHT_VERBOSE=1 (per-frame times of the budget run on
-# stderr). The error column is per-vertex transmittance against the double-precision reference
+# vertices, default 4000), PNB_BENCH_LIGHT_PARTS (default "sweep 1m budget": which lines to
+# print), PNB_BENCH_LIGHT_VERBOSE=1 (per-frame times of the budget run on stderr). The error column is per-vertex transmittance against the double-precision reference
 # (the renderer does not shade with the light volume yet). Times are wall clock beside cpu_ms
 # (process CPU over all threads), which shows the work apart from waiting on a shared machine.
 
@@ -13,5 +13,6 @@ bench_light() {
   [ "$scene" = holeblock-1m ] && holeblock_mesh
   log "light/$scene: reference transmittance, then each level-0 size and mode (minutes at 256^3)"
   "$build/bench/pnb_bench_light" --scene "$scene" --data-dir "$data" --frames "$frames" \
-    --levels "${PNB_BENCH_LIGHT_LEVELS:-16 32 64 128 256}" --samples "${PNB_BENCH_LIGHT_SAMPLES:-4000}"
+    --levels "${PNB_BENCH_LIGHT_LEVELS:-16 32 64 128 256}" --samples "${PNB_BENCH_LIGHT_SAMPLES:-4000}" \
+    --parts "${PNB_BENCH_LIGHT_PARTS:-sweep 1m budget}"
 }

@@ -1,7 +1,7 @@
 // bench/light/light_bench.cpp -- the two-level light volume in the style of Shih et al.'s Table 2
 //
 // Usage: pnb_bench_light --scene NAME --data-dir DIR [--levels "16 32 64 128 256"] [--samples N]
-//        [--frames N]
+//        [--frames N] [--parts "sweep 1m budget"]
 // Prints JSON lines on stdout:
 //   bench "light"        one per (level-0 size, mode none / level0-only / two-level): timings of
 //                        level-0 propagation, level-0 scattering (none: scattering runs once, on
@@ -105,6 +105,9 @@ int run(int argc, char** argv) {
     for (int l; in >> l;) levels.push_back(l);
   }
   penumbra::require(!data_dir.empty(), "pnb_bench_light: --data-dir DIR is required");
+  // Which lines to print: "sweep" (the Table 2 lines), "1m" (light-1m), "budget" (light-budget).
+  const std::string parts = " " + pb::option(argc, argv, "parts", "sweep 1m budget") + " ";
+  auto part = [&](const char* name) { return parts.find(std::string(" ") + name + " ") != std::string::npos; };
 
   const pb::Scene scene = pb::load_scene(name, data_dir);
   auto mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(pb::mesh_view(scene), "bench"));
@@ -175,7 +178,7 @@ int run(int argc, char** argv) {
 
   const double none_error = rms_pct(nullptr);
   const double none_image_error = image_rms_pct(nullptr);
-  for (int level : levels) {
+  for (int level : part("sweep") ? levels : std::vector<int>{}) {
     {
       nlohmann::ordered_json line;
       line["bench"] = "light";
@@ -247,7 +250,7 @@ int run(int argc, char** argv) {
   // One full update of the default light volume (128^3, two levels, scattering) with one light:
   // cold (a new field and a light that moved: everything recomputed), and warm (the next time
   // step's field, same light: warm start, cached vertex order and start tets).
-  {
+  if (part("1m")) {
     pr::LightVolumeOptions opt;
     opt.sigma_a = sigma_a;
     opt.sigma_s = {1.0, 1.0, 1.0};
@@ -292,7 +295,7 @@ int run(int argc, char** argv) {
 
   // Per-frame budget: 10 % of one CPU render frame, after a field change (in-situ time step).
   // The frame is the one a lit run renders: shaded by a light field (median of three).
-  {
+  if (part("budget")) {
     const pr::CpuRayCaster caster(mesh);
     const pr::Camera cam = pb::camera(scene);
     const std::vector<float> unit_light(3 * mesh->points.size(), 1.0f);
