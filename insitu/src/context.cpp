@@ -375,6 +375,8 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, S
         lo.level0_resolution = l.level0_resolution;
         lo.sigma_a = l.absorption;
         lo.sigma_s = l.scattering;
+        // With the gpu backend the light is solved on the same device as the rendering.
+        if (m_mesh->gpu_caster) lo.device = process_gpu_device(false);
         lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
         lv->set_lights(l.lights);
       }

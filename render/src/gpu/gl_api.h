@@ -44,7 +44,8 @@ namespace penumbra::render::gpu {
   X(PFNGLPROGRAMUNIFORM4FPROC, ProgramUniform4f)                  \
   X(PFNGLPROGRAMUNIFORM1FVPROC, ProgramUniform1fv)                \
   X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                    \
-  X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)
+  X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)                        \
+  X(PFNGLPROGRAMUNIFORM3IPROC, ProgramUniform3i)
 
 struct GlApi {
 #define PNB_GL_MEMBER(type, name) type name = nullptr;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "gpu_light_solver.h"
 #include "level0_grid.h"
 #include "level0_sweep.h"
 #include "level1_mesh.h"
@@ -70,6 +71,10 @@ struct LightVolume::Impl {
     int passes = 0;
     double residual = HUGE_VAL;
     bool converged = false;  // false when the pass cap stopped it
+    // GPU solve: the light's device buffers; its level-1 values there are stale after a CPU
+    // change (initial values, warm start).
+    std::shared_ptr<lighting::GpuLightBuffers> gpu;
+    bool gpu_rho1_stale = true;
     // The light moved (or the step changed): its vertex order and start tets are stale.
     void forget_direction() {
       order_valid = false;
@@ -84,6 +89,9 @@ struct LightVolume::Impl {
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
+  TransferFunction tf;
+  std::unique_ptr<lighting::GpuLightSolver> gpu;  // null: the CPU solves
+  bool gpu_scatter_stale = true;                  // the device's scattering source is out of date
   bool has_field = false, resample_pending = false;
   std::vector<LightState> lights;
   std::vector<float> pre, rgb;
@@ -96,11 +104,13 @@ struct LightVolume::Impl {
   std::vector<float> scratch0;
   double step = 0;
   double last_level0_ms = 0, last_sweep_ms = 0;  // for the time budget's look-ahead
+  double last_gpu_pass_ms = 0;                    // a GPU level-1 pass cannot stop at a deadline
 
   void build_grid() {
     const auto dims = lighting::Level0Grid::choose_dims(mesh->bounds, opt.level0_resolution,
                                                         opt.level0_memory_budget_bytes, std::max<std::size_t>(1, lights.size()));
     grid = lighting::Level0Grid(*mesh, dims, opt.occluders);
+    if (gpu) gpu->set_grid(grid);
     step = opt.level1_step > 0 ? opt.level1_step : std::max(topology.mean_edge, grid.max_spacing());
     resample_pending = has_field;
     mark_all();
@@ -112,7 +122,12 @@ struct LightVolume::Impl {
   void solve_level0(LightState& l, LightUpdateReport& report) {
     const auto t0 = Clock::now();
     std::vector<float> rho0;
-    lighting::solve_level0(grid, l.light, opt.sigma_a, rho0, scratch0);
+    if (gpu) {
+      if (!l.gpu) l.gpu = gpu->new_light();
+      gpu->solve_level0(*l.gpu, l.light, opt.sigma_a, rho0);
+    } else {
+      lighting::solve_level0(grid, l.light, opt.sigma_a, rho0, scratch0);
+    }
     const std::size_t np = mesh->points.size();
     std::vector<float> at_vertex(np);
     parallel_for(np, 4096, [&](std::size_t b, std::size_t e) {
@@ -131,6 +146,7 @@ struct LightVolume::Impl {
     l.rho0 = std::move(rho0);
     l.rho0_vertex = std::move(at_vertex);
     l.has_solution = true;
+    l.gpu_rho1_stale = true;
     l.pass_state.clear();  // the vertex order and start tets depend only on the light: kept
     l.passes = 0;
     l.residual = HUGE_VAL;
@@ -146,11 +162,22 @@ struct LightVolume::Impl {
     if (!l.order_valid) {
       l.order = lighting::order_vertices(*mesh, topology, l.light, step);
       l.order_valid = true;
+      if (gpu) gpu->set_order(*l.gpu, l.order);
     }
     const lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
-    std::atomic<std::size_t> lost{0};
-    const bool finished = lighting::level1_pass(ctx, l.light, l.rho0, l.order, l.rho1, l.pass_state, lost, deadline);
-    report.lost_traces += lost.load();
+    bool finished = true;
+    if (gpu) {
+      // A whole pass on the device (no deadline inside it).
+      if (l.gpu_rho1_stale) gpu->set_rho1(*l.gpu, l.rho1);
+      l.gpu_rho1_stale = false;
+      std::size_t lost = 0;
+      l.pass_state.residual = gpu->level1_pass(*l.gpu, l.light, ctx, l.rho1, lost);
+      report.lost_traces += lost;
+    } else {
+      std::atomic<std::size_t> lost{0};
+      finished = lighting::level1_pass(ctx, l.light, l.rho0, l.order, l.rho1, l.pass_state, lost, deadline);
+      report.lost_traces += lost.load();
+    }
     combine_pending = true;
     report.l1_prop_ms += ms_since(t0);
     if (!finished) return false;
@@ -194,6 +221,7 @@ struct LightVolume::Impl {
     scatter_residual = scatter ? HUGE_VAL : 0.0;
     scatter_iterations = 0;
     combine_pending = false;
+    gpu_scatter_stale = true;
   }
 };
 
@@ -207,6 +235,9 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
   im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
+  if (im.opt.device)
+    im.gpu = std::make_unique<lighting::GpuLightSolver>(im.opt.device, *im.mesh, im.topology, im.scatter_weights,
+                                                        im.opt.occluders);
   im.build_grid();
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
 }
@@ -222,6 +253,7 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
               " values but the mesh has " + std::to_string(im.mesh->points.size()) + " points; expected one per point");
   tf.validate();
   im.scalars = point_scalars;
+  im.tf = tf;
   im.field.build(*im.mesh, im.scalars, tf);
   im.has_field = true;
   im.resample_pending = true;
@@ -277,6 +309,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (im.resample_pending) {
     const auto tr = Clock::now();
     im.grid.resample(*im.mesh, im.scalars, im.field.table);
+    if (im.gpu) im.gpu->set_field(im.grid, im.field, im.tf);
     im.resample_pending = false;
     report.resample_ms = ms_since(tr);
     did_work = true;
@@ -301,26 +334,41 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
                             ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(budget.max_ms))
                             : Clock::time_point::max();
   for (auto& l : im.lights)
-    while (l.stage == Stage::level1 && allowed(0.0)) {
+    while (l.stage == Stage::level1 && allowed(im.gpu ? im.last_gpu_pass_ms : 0.0)) {
+      const auto tp = Clock::now();
       if (im.level1_pass(l, report, deadline)) ++report.work_units;
+      if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
       did_work = true;
     }
   if (im.combine_pending) im.combine();
   if (!im.scatter_done) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
+    bool gpu_ran = false;
     while (!im.scatter_done && allowed(im.last_sweep_ms)) {
       const auto tw = Clock::now();
-      im.scatter_residual =
-          lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
+      int ran = 1;
+      if (im.gpu) {
+        // A batch of Jacobi iterations, never more than the cap or the work units left.
+        if (im.gpu_scatter_stale) im.gpu->set_scatter_source(im.pre, im.rgb);
+        im.gpu_scatter_stale = false;
+        int most = im.opt.scatter_max_iterations - im.scatter_iterations;
+        if (budget.max_work_units >= 0) most = std::min(most, budget.max_work_units - report.work_units);
+        ran = im.gpu->scatter(most, tolerance, im.opt.sigma_s, im.scatter_residual);
+        gpu_ran = true;
+      } else {
+        im.scatter_residual =
+            lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
+      }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;
-      ++im.scatter_iterations;
-      ++report.scatter_iterations;
-      ++report.work_units;
+      im.scatter_iterations += ran;
+      report.scatter_iterations += ran;
+      report.work_units += ran;
       im.scatter_converged = im.scatter_residual <= tolerance;
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
+    if (gpu_ran) im.gpu->read_scatter(im.rgb);
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
