@@ -13,6 +13,7 @@
 #include "level1_mesh.h"
 #include "level1_solve.h"
 #include "light_scattering.h"
+#include "scatter_solver.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 
@@ -85,7 +86,9 @@ struct LightVolume::Impl {
   std::shared_ptr<const TetMesh> mesh;
   LightVolumeOptions opt;
   lighting::Level1Topology topology;
-  std::vector<float> scatter_weights;
+  std::vector<float> scatter_weights;  // the GPU's scattering (Jacobi on the normalised weights)
+  lighting::ScatterSolver scatter_solver;  // the CPU's (conjugate gradients)
+  bool scatter_started = false;
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
@@ -220,6 +223,7 @@ struct LightVolume::Impl {
     scatter_converged = !scatter;
     scatter_residual = scatter ? HUGE_VAL : 0.0;
     scatter_iterations = 0;
+    scatter_started = false;
     combine_pending = false;
     gpu_scatter_stale = true;
   }
@@ -234,10 +238,13 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.mesh = std::move(mesh);
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
-  im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
-  if (im.opt.device)
+  if (im.opt.device) {
+    im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
     im.gpu = std::make_unique<lighting::GpuLightSolver>(im.opt.device, *im.mesh, im.topology, im.scatter_weights,
                                                         im.opt.occluders);
+  } else {
+    im.scatter_solver = lighting::ScatterSolver(*im.mesh, im.topology);
+  }
   im.build_grid();
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
 }
@@ -345,6 +352,13 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
     bool gpu_ran = false;
+    if (!im.gpu && !im.scatter_started) {
+      im.scatter_solver.start(im.pre, im.opt.sigma_s, im.rgb);
+      im.scatter_started = true;
+      im.scatter_residual = im.scatter_solver.residual();
+      im.scatter_converged = im.scatter_residual <= tolerance;
+      im.scatter_done = im.scatter_converged;
+    }
     while (!im.scatter_done && allowed(im.last_sweep_ms)) {
       const auto tw = Clock::now();
       int ran = 1;
@@ -357,8 +371,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         ran = im.gpu->scatter(most, tolerance, im.opt.sigma_s, im.scatter_residual);
         gpu_ran = true;
       } else {
-        im.scatter_residual =
-            lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
+        im.scatter_residual = im.scatter_solver.iterate();
       }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;
@@ -369,6 +382,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
+    if (!im.gpu) im.scatter_solver.read(im.rgb);
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
