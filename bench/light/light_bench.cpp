@@ -1,7 +1,7 @@
 // bench/light/light_bench.cpp -- the two-level light volume in the style of Shih et al.'s Table 2
 //
 // Usage: pnb_bench_light --scene NAME --data-dir DIR [--levels "16 32 64 128 256"] [--samples N]
-//        [--frames N] [--parts "sweep 1m budget"]
+//        [--frames N] [--parts "sweep 1m gpu budget"]
 // Prints JSON lines on stdout:
 //   bench "light"        one per (level-0 size, mode none / level0-only / two-level): timings of
 //                        level-0 propagation, level-0 scattering (none: scattering runs once, on
@@ -110,8 +110,9 @@ int run(int argc, char** argv) {
     for (int l; in >> l;) levels.push_back(l);
   }
   penumbra::require(!data_dir.empty(), "pnb_bench_light: --data-dir DIR is required");
-  // Which lines to print: "sweep" (the Table 2 lines), "1m" (light-1m), "budget" (light-budget).
-  const std::string parts = " " + pb::option(argc, argv, "parts", "sweep 1m budget") + " ";
+  // Which lines to print: "sweep" (the Table 2 lines), "1m" (light-1m), "gpu" (light-1m on the
+  // GPU, with "1m"), "budget" (light-budget).
+  const std::string parts = " " + pb::option(argc, argv, "parts", "sweep 1m gpu budget") + " ";
   auto part = [&](const char* name) { return parts.find(std::string(" ") + name + " ") != std::string::npos; };
 
   const pb::Scene scene = pb::load_scene(name, data_dir);
@@ -299,7 +300,7 @@ int run(int argc, char** argv) {
     std::cout << line.dump() << std::endl;
 
     // The same cold update on the GPU; lv now holds the CPU's converged rho of the last light.
-    if (pr::gpu_backend_compiled()) {
+    if (part("gpu") && pr::gpu_backend_compiled()) {
       std::shared_ptr<pr::GpuDevice> device;
       try {
         pr::GpuOptions gpu_options;
