@@ -3,9 +3,10 @@
 # and $frames. Environment: PNB_BENCH_LIGHT_SCENE (holeblock-1m, the default, or grid-aligned),
 # PNB_BENCH_LIGHT_LEVELS (default "16 32 64 128 256"), PNB_BENCH_LIGHT_SAMPLES (reference
 # vertices, default 4000), PNB_BENCH_LIGHT_PARTS (default "sweep 1m gpu budget": which lines to
-# print), PNB_BENCH_LIGHT_VERBOSE=1 (per-frame times of the budget run on stderr). The error column is per-vertex transmittance against the double-precision reference
-# (the renderer does not shade with the light volume yet). Times are wall clock beside cpu_ms
-# (process CPU over all threads), which shows the work apart from waiting on a shared machine.
+# print), PNB_BENCH_LIGHT_VERBOSE=1 (per-frame times of the budget run on stderr). Errors are
+# against the double-precision transmittance (image and per vertex; see light_bench.cpp). Times
+# are wall clock beside cpu_ms (process CPU over all threads), which shows the work apart from
+# waiting on a shared machine.
 
 bench_light() {
   build_targets pnb_bench_light
