@@ -22,6 +22,17 @@
 //   shadow-light-volume:  the two-level light volume (level 0 at 128) solved to convergence.
 // ms_per_frame includes recomputing L (AO follows the viewer), not the pyramid (per transfer
 // function, reported as pyramid_build_ms). Errors are over pixels the mesh covers.
+//
+// Every line has "backend". With the GPU backend (--gpu on, the default; a hardware device or
+// Mesa's llvmpipe) the modes ao-points, ao-object (splits 1/3/7) and shadow-cone are repeated with
+// backend "gpu": L from GpuConeTracer (the pyramid filtered on the CPU and uploaded once per
+// transfer function: pyramid_upload_ms), the frame from GpuRayCaster, and beside the errors
+// against Monte Carlo the agreement with the CPU line of the same mode: max_abs_diff_vs_cpu
+// (|L_gpu - L_cpu| over the mesh points, with the mean and the count above 1e-4) and
+// image_rms_vs_cpu_pct (the two frames, % of 255);
+// light_ms is the cone tracing alone (dispatches and read-back of L), within ms_per_frame.
+// pyramid_gpu_build_ms / pyramid_gpu_filter_ms: the same pyramid filtered on the device (all of
+// it, and the passes alone), beside pyramid_build_ms of the CPU.
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -29,12 +40,15 @@
 #include <cstdio>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "bench_util.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/cpu_ray_caster.h"
+#include "penumbra/render/gpu_occlusion.h"
+#include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
 #include "penumbra/render/occlusion.h"
@@ -180,6 +194,8 @@ int run(int argc, char** argv) {
   const int hex_n = std::stoi(pb::option(argc, argv, "hex-n", "24"));
   const double alpha = std::stod(pb::option(argc, argv, "alpha", "1"));
   const std::string weight_name = pb::option(argc, argv, "weight", "mean");
+  const std::string gpu_option = pb::option(argc, argv, "gpu", "on");
+  penumbra::require(gpu_option == "on" || gpu_option == "off", "pnb_bench_occlusion: --gpu " + gpu_option + "; expected on or off");
   penumbra::require(weight_name == "mean" || weight_name == "thesis",
                     "pnb_bench_occlusion: --weight " + weight_name + "; expected mean or thesis");
   const pr::SectionWeight weight = weight_name == "mean" ? pr::SectionWeight::mean : pr::SectionWeight::thesis;
@@ -259,9 +275,10 @@ int run(int argc, char** argv) {
   }
 
   auto emit = [&](const std::string& mode, int splits, const std::vector<double>& times, const pr::Image& image,
-                  const pr::Image* reference) {
+                  const pr::Image* reference, const nlohmann::ordered_json& extra = {}) {
     nlohmann::ordered_json line;
     line["bench"] = "occlusion";
+    line["backend"] = "cpu";
     line["scene"] = s.name;
     line["tets"] = mesh.tet_count();
     line["points"] = mesh.points.size();
@@ -292,6 +309,7 @@ int run(int argc, char** argv) {
     }
     line["threads"] = penumbra::worker_count();
     line["load_avg"] = pb::load_average();
+    for (const auto& [key, value] : extra.items()) line[key] = value;
     std::cout << line.dump() << std::endl;
   };
   auto timed = [&](const std::function<pr::Image()>& frame, pr::Image& last) {
@@ -311,18 +329,25 @@ int run(int argc, char** argv) {
   auto t = timed([&] { return caster.render(s.scalars, s.tf, s.camera); }, image);
   emit("emission-absorption", 0, t, image, with_mc ? &mc_ao_image : nullptr);
 
+  // The CPU's L and frame per mode and splits, for the GPU lines' agreement.
+  std::map<std::string, std::pair<std::vector<float>, pr::Image>> cpu_result;
+  auto key = [](const std::string& mode, int splits) { return mode + "/" + std::to_string(splits); };
   for (int splits : {1, 3, 7}) {
     const pr::ConeTracer tracer(pyramid, cone(kAperture, splits, false));
     auto ao = [&](const Vec3d& x) { return pr::directional_occlusion(tracer, x, eye); };
-    t = timed([&] { return render_with(pr::grey_light_rgb(pr::evaluate_at_points(mesh, ao))); }, image);
+    std::vector<float> field;
+    t = timed([&] { field = pr::evaluate_at_points(mesh, ao); return render_with(pr::grey_light_rgb(field)); }, image);
     emit("ao-points", splits, t, image, with_mc ? &mc_ao_image : nullptr);
+    cpu_result[key("ao-points", splits)] = {field, image};
     t = timed(
         [&] {
           const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res, ao);
-          return render_with(pr::grey_light_rgb(pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return vol.sample(x); })));
+          field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return vol.sample(x); });
+          return render_with(pr::grey_light_rgb(field));
         },
         image);
     emit("ao-object", splits, t, image, with_mc ? &mc_ao_image : nullptr);
+    cpu_result[key("ao-object", splits)] = {field, image};
     // Image space: the cones traced at every segment end of every ray (a cone per tet step, so
     // only on the smaller scenes).
     if (mesh.tets.size() <= 200000) {
@@ -358,11 +383,15 @@ int run(int argc, char** argv) {
   pr::ConeOptions narrow = cone(kShadowAperture, 1, true);
   narrow.length = pyramid.bounds().diagonal();  // the whole mesh, like the reference ray
   const pr::ConeTracer shadow_cone(pyramid, narrow);
-  t = timed([&] {
-    return render_with(pr::grey_light_rgb(
-        pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x); })));
-  }, image);
-  emit("shadow-cone", 1, t, image, with_mc ? &hard_image : nullptr);
+  {
+    std::vector<float> field;
+    t = timed([&] {
+      field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x); });
+      return render_with(pr::grey_light_rgb(field));
+    }, image);
+    emit("shadow-cone", 1, t, image, with_mc ? &hard_image : nullptr);
+    cpu_result[key("shadow-cone", 1)] = {field, image};
+  }
   pr::LightVolumeOptions lv_options;
   lv_options.level0_resolution = 128;
   pr::LightVolume volume(s.mesh, lv_options);
@@ -373,6 +402,90 @@ int run(int argc, char** argv) {
     return render_with(volume.light_rgb());
   }, image);
   emit("shadow-light-volume", 0, t, image, with_mc ? &hard_image : nullptr);
+
+  // The GPU path: the same modes with the cones traced and the frame rendered on the device.
+  std::shared_ptr<pr::GpuDevice> device;
+  if (gpu_option == "on" && pr::gpu_backend_compiled()) {
+    try {
+      pr::GpuOptions gpu_options;
+      gpu_options.log = [](const std::string&) {};
+      device = pr::GpuDevice::open(gpu_options);
+    } catch (const std::exception& e) {
+      std::cerr << "pnb_bench_occlusion: no GPU lines: " << e.what() << "\n";
+    }
+  }
+  if (!device) return 0;
+  const pr::GpuExtinctionPyramid gpu_pyramid(device, pyramid);
+  // The same pyramid filtered on the device (second build timed: the first JIT-compiles the shader
+  // on some drivers). The cones below still read the CPU-built levels (see gpu_occlusion.h).
+  pr::gpu_build_pyramid_levels(device, grid);
+  const pr::GpuPyramidLevels gpu_levels = pr::gpu_build_pyramid_levels(device, grid);
+  pr::GpuRayCaster gpu_caster(device, s.mesh);
+  auto gpu_frame = [&](const std::vector<float>& field) {
+    const std::vector<float> rgb = pr::grey_light_rgb(field);
+    pr::RenderOptions o = lit;
+    o.shading.light_rgb = &rgb;
+    return gpu_caster.render(s.scalars, s.tf, s.camera, o);
+  };
+  // L on the device alone (dispatches and read-back), per timed frame.
+  std::vector<double> light_times;
+  auto traced = [&](const std::function<std::vector<float>()>& trace) {
+    pb::Stopwatch clock;
+    std::vector<float> field = trace();
+    light_times.push_back(clock.ms());
+    return field;
+  };
+  auto emit_gpu = [&](const std::string& mode, int splits, const std::vector<double>& times, const std::vector<float>& field,
+                      const pr::Image& frame, const pr::Image* reference) {
+    const auto& [cpu_field, cpu_image] = cpu_result.at(key(mode, splits));
+    double max_diff = 0, sum_diff = 0;
+    std::size_t over = 0;
+    for (std::size_t p = 0; p < field.size(); ++p) {
+      const double d = std::fabs(static_cast<double>(field[p]) - cpu_field[p]);
+      max_diff = std::max(max_diff, d);
+      sum_diff += d;
+      over += d > 1e-4 ? 1 : 0;
+    }
+    nlohmann::ordered_json extra;
+    extra["backend"] = "gpu";
+    extra["light_ms"] = pb::rounded(pb::median(light_times));
+    extra["pyramid_built_on"] = "cpu";
+    extra["pyramid_upload_ms"] = pb::rounded(gpu_pyramid.upload_ms());
+    extra["pyramid_gpu_build_ms"] = pb::rounded(gpu_levels.build_ms);
+    extra["pyramid_gpu_filter_ms"] = pb::rounded(gpu_levels.filter_ms);
+    extra["max_abs_diff_vs_cpu"] = max_diff;
+    extra["mean_abs_diff_vs_cpu"] = field.empty() ? 0.0 : sum_diff / static_cast<double>(field.size());
+    // Points beyond float rounding: where the 3/7-cone arrangement's turn about the axis flips
+    // (|axis.x| = 0.6, see gpu_occlusion.h) on one path only.
+    extra["points_diff_over_1e-4"] = over;
+    extra["image_rms_vs_cpu_pct"] =
+        pb::rounded(pr::rms_difference_pct(pr::to_rgb8(frame, s.background), pr::to_rgb8(cpu_image, s.background)));
+    extra["device"] = device->info().gl_renderer;
+    extra["software"] = device->info().software;
+    emit(mode, splits, times, frame, reference, extra);
+    light_times.clear();
+  };
+  const pr::ConeTarget towards_eye = pr::ConeTarget::towards_eye(eye);
+  for (int splits : {1, 3, 7}) {
+    const pr::GpuConeTracer tracer(gpu_pyramid, cone(kAperture, splits, false));
+    for (int volume : {0, preillum_res}) {
+      std::vector<float> field;
+      t = timed([&] {
+        field = traced([&] { return tracer.at_mesh_points(towards_eye, s.mesh, volume); });
+        return gpu_frame(field);
+      }, image);
+      emit_gpu(volume ? "ao-object" : "ao-points", splits, t, field, image, with_mc ? &mc_ao_image : nullptr);
+    }
+  }
+  {
+    const pr::GpuConeTracer tracer(gpu_pyramid, narrow);
+    std::vector<float> field;
+    t = timed([&] {
+      field = traced([&] { return tracer.at_mesh_points(pr::ConeTarget::towards_light(sun), s.mesh); });
+      return gpu_frame(field);
+    }, image);
+    emit_gpu("shadow-cone", 1, t, field, image, with_mc ? &hard_image : nullptr);
+  }
   return 0;
 }
 

@@ -362,7 +362,9 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, S
     if (l.occlusion_model) {
       auto& occ = m_mesh->occlusions;
       if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
-      if (!occ[index]) occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, l.occlusion, l.lights);
+      if (!occ[index])  // cones traced on the GPU when it renders
+        occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, l.occlusion, l.lights,
+                                                         m_mesh->gpu_caster ? process_gpu_device(false) : nullptr);
       const auto t0 = Clock::now();
       occ[index]->set_field(scalars, tf);
       m_last_step.light_ms += ms_since(t0);

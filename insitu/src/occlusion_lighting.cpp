@@ -15,31 +15,44 @@ render::ShadowLight shadow_light(const render::Light& l) {
 }  // namespace
 
 OcclusionLighting::OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh, const OcclusionConfig& config,
-                                     std::vector<render::Light> lights)
+                                     std::vector<render::Light> lights, std::shared_ptr<render::GpuDevice> gpu)
     : m_mesh(std::move(mesh)),
       m_config(config),
       m_lights(std::move(lights)),
-      m_resampler(m_mesh, config.grid_resolution) {}
+      m_resampler(m_mesh, config.grid_resolution),
+      m_gpu(std::move(gpu)) {}
 
 void OcclusionLighting::set_field(const std::vector<float>& scalars, const render::TransferFunction& tf) {
+  m_gpu_ao.reset();
+  m_gpu_shadow.reset();
   m_ao_tracer.reset();
   m_shadow_tracer.reset();
   m_pyramid = render::ExtinctionPyramid(m_resampler.resample(scalars, tf));
   render::ConeOptions ao = render::ConeOptions::occlusion(m_config.aperture_deg, m_config.splits);
   ao.attenuation = m_config.attenuation;
   m_ao_tracer = std::make_unique<render::ConeTracer>(m_pyramid, ao);
+  if (m_gpu) {
+    if (m_gpu_pyramid)
+      m_gpu_pyramid->update(m_pyramid);
+    else
+      m_gpu_pyramid = std::make_unique<render::GpuExtinctionPyramid>(m_gpu, m_pyramid);
+    m_gpu_ao = std::make_unique<render::GpuConeTracer>(*m_gpu_pyramid, ao);
+  }
   m_shadow_rgb.clear();
   if (!m_config.shadows || m_lights.empty()) return;
   render::ConeOptions so = render::ConeOptions::shadow(m_config.shadow_aperture_deg, m_config.shadow_splits);
   so.attenuation = m_config.attenuation;
   m_shadow_tracer = std::make_unique<render::ConeTracer>(m_pyramid, so);
   if (m_config.space == OcclusionSpace::image) return;  // evaluated per sample instead
+  if (m_gpu) m_gpu_shadow = std::make_unique<render::GpuConeTracer>(*m_gpu_pyramid, so);
   const render::ConeTracer& tracer = *m_shadow_tracer;
   m_shadow_rgb.assign(3 * m_mesh->points.size(), 0.0f);
   for (const render::Light& light : m_lights) {
     const render::ShadowLight sl = shadow_light(light);
     const std::vector<float> t =
-        render::evaluate_at_points(*m_mesh, [&](const Vec3d& x) { return render::shadow_transmittance(tracer, sl, x); });
+        m_gpu_shadow ? m_gpu_shadow->at_mesh_points(render::ConeTarget::towards_light(sl), m_mesh)
+                     : render::evaluate_at_points(
+                           *m_mesh, [&](const Vec3d& x) { return render::shadow_transmittance(tracer, sl, x); });
     for (std::size_t p = 0; p < t.size(); ++p)
       for (int c = 0; c < 3; ++c) m_shadow_rgb[3 * p + c] += static_cast<float>(t[p] * light.color[static_cast<std::size_t>(c)]);
   }
@@ -49,7 +62,11 @@ const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) {
   const render::ConeTracer& tracer = *m_ao_tracer;
   auto occlusion = [&](const Vec3d& x) { return render::directional_occlusion(tracer, x, eye); };
   std::vector<float> factor;
-  if (m_config.space == OcclusionSpace::volume) {
+  if (m_gpu_ao) {
+    // Per point, or through the object-space grid (both on the device).
+    const int volume = m_config.space == OcclusionSpace::volume ? m_config.volume_resolution : 0;
+    factor = m_gpu_ao->at_mesh_points(render::ConeTarget::towards_eye(eye), m_mesh, volume);
+  } else if (m_config.space == OcclusionSpace::volume) {
     // Object space: the occlusion on a grid, sampled at the points (sec. 3.3.3).
     const render::PreIlluminationVolume volume(m_pyramid.bounds(), m_config.volume_resolution, occlusion);
     factor = render::evaluate_at_points(*m_mesh, [&](const Vec3d& x) { return volume.sample(x); });

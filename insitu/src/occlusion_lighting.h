@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "config.h"
+#include "penumbra/render/gpu_occlusion.h"
 #include "penumbra/render/occlusion.h"
 #include "penumbra/render/tet_mesh.h"
 
@@ -14,10 +15,15 @@ namespace penumbra::insitu {
 /// Per field: the extinction pyramid of the current step (rebuilt by set_field) and, per camera,
 /// L(x) = AO(x, eye) x sum_k colour_k shadow_k(x) at every mesh point (AO alone without lights or
 /// with shadows off), for the ray caster's light-field shading.
+///
+/// With a GPU device (backend gpu) the cones are traced on it: the pyramid is resampled and
+/// filtered on the CPU, uploaded once per step, and every per-point field (and in space "volume"
+/// the pre-illumination grid) is one dispatch per eye or light. light_at() (image space, CPU ray
+/// caster only) always traces on the CPU.
 class OcclusionLighting {
 public:
   OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh, const OcclusionConfig& config,
-                    std::vector<render::Light> lights);
+                    std::vector<render::Light> lights, std::shared_ptr<render::GpuDevice> gpu = nullptr);
   /// Resamples extinction through `tf`, rebuilds the pyramid and the shadow factors.
   void set_field(const std::vector<float>& scalars, const render::TransferFunction& tf);
   /// The light field (3 floats per point) seen from `eye`.
@@ -34,6 +40,10 @@ private:
   render::ExtinctionResampler m_resampler;
   render::ExtinctionPyramid m_pyramid;
   std::unique_ptr<render::ConeTracer> m_ao_tracer, m_shadow_tracer;
+  // The GPU path (null without a device); declared after m_pyramid, which they point to.
+  std::shared_ptr<render::GpuDevice> m_gpu;
+  std::unique_ptr<render::GpuExtinctionPyramid> m_gpu_pyramid;
+  std::unique_ptr<render::GpuConeTracer> m_gpu_ao, m_gpu_shadow;
   std::vector<float> m_shadow_rgb;  ///< sum_k colour_k shadow_k per point, 3 per point; empty: white
   std::vector<float> m_rgb;
 };
