@@ -82,7 +82,8 @@ float trace(vec3 apex, vec3 axis, float max_length) {
   float len = length(axis);
   if (!(len > 0.0) || !finite_value(len) || u_schedule_count == 0 || !(max_length > u_gap)) return 1.0;
   vec3 w = axis / len;
-  vec3 helper = abs(w.x) < 0.6 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  // The same irrational switch as cone_tracer.cpp's frame().
+  vec3 helper = abs(w.x) < 0.6180339887 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
   vec3 u = normalize(cross(helper, w));
   vec3 v = cross(w, u);
   vec3 dirs[7];

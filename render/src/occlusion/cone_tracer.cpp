@@ -37,7 +37,9 @@ double sub_tan(int cones, double tan_theta) {
 }
 
 void frame(const Vec3d& w, Vec3d& u, Vec3d& v) {
-  const Vec3d helper = std::fabs(w.x) < 0.6 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+  // The switch sits at an irrational |w.x| (the golden ratio's inverse), which no axis between
+  // round coordinates hits, so the float GPU path (cone_trace.comp) picks the same helper.
+  const Vec3d helper = std::fabs(w.x) < 0.6180339887498949 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
   u = normalize(cross(helper, w));
   v = cross(w, u);
 }
