@@ -106,8 +106,9 @@ struct LightVolume::Impl {
   bool has_rgb = false;
   std::vector<float> scratch0;
   double step = 0;
-  double last_level0_ms = 0, last_sweep_ms = 0;  // for the time budget's look-ahead
-  double last_gpu_pass_ms = 0;                    // a GPU level-1 pass cannot stop at a deadline
+  // The last durations, for the time budget's look-ahead (-1: not timed yet).
+  double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
+  double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
   void build_grid() {
     const auto dims = lighting::Level0Grid::choose_dims(mesh->bounds, opt.level0_resolution,
@@ -159,14 +160,17 @@ struct LightVolume::Impl {
     ++report.lights_recomputed;
     report.l0_prop_ms += ms_since(t0);
   }
+  // The vertices sorted along the light: a sort of all points, kept while the light stays.
+  void ensure_order(LightState& l) {
+    if (l.order_valid) return;
+    l.order = lighting::order_vertices(*mesh, topology, l.light, step);
+    l.order_valid = true;
+    if (gpu) gpu->set_order(*l.gpu, l.order);
+  }
   // Returns true when a whole pass finished (one work unit).
   bool level1_pass(LightState& l, LightUpdateReport& report, Clock::time_point deadline) {
     const auto t0 = Clock::now();
-    if (!l.order_valid) {
-      l.order = lighting::order_vertices(*mesh, topology, l.light, step);
-      l.order_valid = true;
-      if (gpu) gpu->set_order(*l.gpu, l.order);
-    }
+    ensure_order(l);
     const lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
     bool finished = true;
     if (gpu) {
@@ -323,8 +327,10 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   }
   // A piece of work starts only if it is expected (from its last duration) to end within the
   // time budget; the first piece of a call always starts, so every call makes progress.
+  // A piece never timed yet (expected_ms < 0) starts only as the first of a call.
   auto allowed = [&](double expected_ms) {
     if (budget.max_work_units >= 0 && report.work_units >= budget.max_work_units) return false;
+    if (expected_ms < 0) return !did_work || !std::isfinite(budget.max_ms);
     return !did_work || ms_since(t0) + expected_ms < budget.max_ms;
   };
   using Stage = Impl::LightState::Stage;
@@ -341,25 +347,45 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
                             ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(budget.max_ms))
                             : Clock::time_point::max();
   for (auto& l : im.lights)
-    while (l.stage == Stage::level1 && allowed(im.gpu ? im.last_gpu_pass_ms : 0.0)) {
+    while (l.stage == Stage::level1) {
+      if (!l.order_valid && !im.gpu) {  // a piece of its own: it cannot stop at the deadline
+        if (!allowed(im.last_order_ms)) break;
+        const auto to = Clock::now();
+        im.ensure_order(l);
+        im.last_order_ms = ms_since(to);
+        report.l1_prop_ms += im.last_order_ms;
+        did_work = true;
+        continue;
+      }
+      if (!allowed(im.gpu ? im.last_gpu_pass_ms : 0.0)) break;
       const auto tp = Clock::now();
       if (im.level1_pass(l, report, deadline)) ++report.work_units;
       if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
       did_work = true;
     }
   if (im.combine_pending) im.combine();
-  if (!im.scatter_done) {
+  // Scattering waits for the lights: every level-1 pass changes its source and restarts it, so
+  // iterations run before the last pass would be thrown away. Until then light_rgb() holds the
+  // unscattered estimate plus the last scattering's correction (see combine()).
+  bool lights_settled = true;
+  for (const auto& l : im.lights) lights_settled = lights_settled && l.stage == Stage::done;
+  if (!im.scatter_done && lights_settled) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
-    bool gpu_ran = false;
-    if (!im.gpu && !im.scatter_started) {
+    bool gpu_ran = false, cpu_ran = false;
+    // Starting the CPU solve (the initial residual: about one iteration's work) is a piece of
+    // the budget like an iteration.
+    if (!im.gpu && !im.scatter_started && allowed(im.last_sweep_ms)) {
+      const auto tw = Clock::now();
       im.scatter_solver.start(im.pre, im.opt.sigma_s, im.rgb);
+      if (im.last_sweep_ms < 0) im.last_sweep_ms = ms_since(tw);  // the first look-ahead
       im.scatter_started = true;
       im.scatter_residual = im.scatter_solver.residual();
       im.scatter_converged = im.scatter_residual <= tolerance;
       im.scatter_done = im.scatter_converged;
+      did_work = true;
     }
-    while (!im.scatter_done && allowed(im.last_sweep_ms)) {
+    while (!im.scatter_done && (im.gpu || im.scatter_started) && allowed(im.last_sweep_ms)) {
       const auto tw = Clock::now();
       int ran = 1;
       if (im.gpu) {
@@ -372,6 +398,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         gpu_ran = true;
       } else {
         im.scatter_residual = im.scatter_solver.iterate();
+        cpu_ran = true;
       }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;
@@ -382,7 +409,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
-    if (!im.gpu) im.scatter_solver.read(im.rgb);
+    if (cpu_ran) im.scatter_solver.read(im.rgb);
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
