@@ -35,6 +35,13 @@ public:
   }
 
   int piece(double s) const { return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin()); }
+  /// piece(s), checking `hint` first: along a walk the scalar is continuous, so a segment
+  /// usually starts in the piece where the previous one ended.
+  int piece(double s, int hint) const {
+    const auto h = static_cast<std::size_t>(hint);
+    if (hint >= 0 && h <= m_x.size() && (h == 0 || m_x[h - 1] <= s) && (h == m_x.size() || s < m_x[h])) return hint;
+    return piece(s);
+  }
 
   double tau(double s) const {
     if (std::isnan(s)) return 0.0;
@@ -43,9 +50,12 @@ public:
   }
 
   /// Integral of tau over a segment of `length` whose scalar runs linearly from s0 to s1.
-  double integral(double s0, double s1, double length) const {
+  /// `hint` (optional): a guess of s0's piece, updated to s1's.
+  double integral(double s0, double s1, double length, int* hint = nullptr) const {
     if (!(length > 0.0) || std::isnan(s0) || std::isnan(s1)) return 0.0;
-    const int p0 = piece(s0), p1 = piece(s1);
+    const int p0 = hint ? piece(s0, *hint) : piece(s0);
+    const int p1 = hint ? piece(s1, p0) : piece(s1);
+    if (hint) *hint = p1;
     if (p0 == p1) return 0.5 * (at(p0, s0) + at(p0, s1)) * length;
     const int step = p1 > p0 ? 1 : -1;
     const double inv_ds = 1.0 / (s1 - s0);

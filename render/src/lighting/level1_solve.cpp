@@ -22,7 +22,8 @@ constexpr double kLinearDepth = 2.772588722239781;
 // Vertices per batch of a pass: the granularity at which a time budget can stop it.
 constexpr std::size_t kBatch = 2048;
 
-double segment_depth(const Level1Context& ctx, std::int32_t t, const Vec3d& x, const Vec3d& d, double ta, double tb) {
+double segment_depth(const Level1Context& ctx, std::int32_t t, const Vec3d& x, const Vec3d& d, double ta, double tb,
+                     int& piece_hint) {
   if (!(tb > ta)) return 0.0;
   const auto tt = static_cast<std::size_t>(t);
   const double base = ctx.field.base[tt];
@@ -31,7 +32,7 @@ double segment_depth(const Level1Context& ctx, std::int32_t t, const Vec3d& x, c
   const Vec3d& g = ctx.field.grad[tt];
   const double s_x = base + dot(g, x - ctx.mesh.points[static_cast<std::size_t>(ctx.mesh.tets[tt][0])]);
   const double slope = dot(g, d);
-  return ctx.field.table.integral(s_x + slope * ta, s_x + slope * tb, tb - ta);
+  return ctx.field.table.integral(s_x + slope * ta, s_x + slope * tb, tb - ta, &piece_hint);
 }
 
 }  // namespace
@@ -148,6 +149,7 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
 
   unsigned excluded = 0xFu & ~(1u << local);  // the faces through v
   double t_in = 0.0, depth = 0.0;
+  int piece_hint = -1;
   for (int move = 0; move < kMaxMoves; ++move) {
     double t_out = HUGE_VAL;
     int exit = -1;
@@ -164,10 +166,10 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
     }
     t_out = std::max(t_out, t_in);
     if (t_out >= seg_length || exit < 0) {
-      depth += segment_depth(ctx, tet, x, d, t_in, seg_length);
+      depth += segment_depth(ctx, tet, x, d, t_in, seg_length, piece_hint);
       return {Trace::Kind::inside, tet, x + d * seg_length, depth};
     }
-    depth += segment_depth(ctx, tet, x, d, t_in, t_out);
+    depth += segment_depth(ctx, tet, x, d, t_in, t_out, piece_hint);
     const std::int32_t next = mesh.neighbors[static_cast<std::size_t>(tet)][exit];
     if (next < 0) return {Trace::Kind::left_mesh, tet, x + d * t_out, depth};
     excluded = 0;
@@ -225,6 +227,10 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
               });
     group_begin = end;
   }
+  order.path_length.assign(mesh.points.size(), 0.0);
+  parallel_for(mesh.points.size(), 4096, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) order.path_length[p] = box_path_length(mesh.bounds, mesh.points[p], light);
+  });
   order.group_of.assign(mesh.points.size(), -1);
   std::size_t begin = 0;
   for (std::size_t g = 0; g < order.group_end.size(); ++g) {
@@ -267,7 +273,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       const auto c = static_cast<std::size_t>(tv[k]);
       values[k] = rho1[c];
       corner[k] = mesh.points[c];
-      path[k] = box_path_length(mesh.bounds, corner[k], light);
+      path[k] = order.path_length[c];
     }
     const Vec3d u = point ? normalize(tr.end - light.vector) : -back;
     return interpolate_light(w, values, path, box_path_length(mesh.bounds, tr.end, light), corner, u);

@@ -86,6 +86,8 @@ struct VertexOrder {
   std::vector<std::int32_t> vertices;
   std::vector<std::size_t> group_end;
   std::vector<std::int32_t> group_of;  ///< per point; -1 for points in no tet
+  /// Per point: box_path_length from it towards the light (read at every departure tet's corners).
+  std::vector<double> path_length;
 };
 
 /// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
