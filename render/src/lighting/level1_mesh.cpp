@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "penumbra/core/thread_pool.h"
+#include "tet_geometry.h"
 
 namespace penumbra::render::lighting {
 
@@ -23,6 +24,13 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
       tet_ids[slot] = static_cast<std::int32_t>(t);
       tet_local[slot] = static_cast<std::int8_t>(k);
     }
+
+  face_inward.assign(nt, 0);
+  parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t)
+      for (int j = 0; j < 4; ++j)
+        if (canonical_face_inward(mesh, static_cast<std::int32_t>(t), j)) face_inward[t] |= static_cast<std::uint8_t>(1u << j);
+  });
 
   // Edge neighbours: the other three vertices of each incident tet, deduplicated per point.
   edge_offsets.assign(np + 1, 0);

@@ -17,6 +17,9 @@ struct Level1Topology {
   std::vector<std::int64_t> edge_offsets;  ///< point p's edge neighbours, sorted, unique
   std::vector<std::int32_t> edge_ids;
   std::vector<float> longest_edge;         ///< per point, its longest incident edge
+  /// Per tet, bit j: face j's canonical normal points inward (see canonical_face_inward), so the
+  /// walk gets oriented face planes without a test per crossing.
+  std::vector<std::uint8_t> face_inward;
   double mean_edge = 0.0;
   double min_edge = 0.0;
 

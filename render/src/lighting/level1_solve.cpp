@@ -153,9 +153,10 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
   for (int move = 0; move < kMaxMoves; ++move) {
     double t_out = HUGE_VAL;
     int exit = -1;
+    const unsigned inward = topo.face_inward[static_cast<std::size_t>(tet)];
     for (int j = 0; j < 4; ++j) {
       if (excluded & (1u << j)) continue;
-      const FacePlane f = face_plane(mesh, tet, j);
+      const FacePlane f = face_plane(mesh, tet, j, (inward >> j) & 1u);
       const double den = dot(f.n, d);
       if (den <= 0.0 || den * den <= kParallel * kParallel * dot(f.n, f.n)) continue;
       const double tj = dot(f.n, f.a - x) / den;

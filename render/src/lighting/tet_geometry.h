@@ -18,7 +18,8 @@ inline constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0,
 struct FacePlane {
   Vec3d n, a;
 };
-inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j) {
+/// The plane of face j of tet t with its normal from the vertices sorted by id, not yet oriented.
+inline FacePlane canonical_face(const TetMesh& mesh, std::int32_t t, int j) {
   const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
   std::int32_t f0 = tv[kFaceVertices[j][0]], f1 = tv[kFaceVertices[j][1]], f2 = tv[kFaceVertices[j][2]];
   if (f0 > f1) std::swap(f0, f1);
@@ -27,9 +28,21 @@ inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j) {
   const Vec3d& a = mesh.points[static_cast<std::size_t>(f0)];
   const Vec3d& b = mesh.points[static_cast<std::size_t>(f1)];
   const Vec3d& c = mesh.points[static_cast<std::size_t>(f2)];
-  Vec3d n = cross(b - a, c - a);
-  if (dot(n, mesh.points[static_cast<std::size_t>(tv[j])] - a) > 0) n = -n;
-  return {n, a};
+  return {cross(b - a, c - a), a};
+}
+/// True when face j's canonical normal points into tet t (face_plane then negates it).
+inline bool canonical_face_inward(const TetMesh& mesh, std::int32_t t, int j) {
+  const FacePlane f = canonical_face(mesh, t, j);
+  return dot(f.n, mesh.points[static_cast<std::size_t>(mesh.tets[static_cast<std::size_t>(t)][j])] - f.a) > 0;
+}
+/// face_plane with the orientation already known (canonical_face_inward, cached per tet).
+inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j, bool inward) {
+  FacePlane f = canonical_face(mesh, t, j);
+  f.n = f.n * (inward ? -1.0 : 1.0);
+  return f;
+}
+inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j) {
+  return face_plane(mesh, t, j, canonical_face_inward(mesh, t, j));
 }
 
 /// Barycentric coordinates of p in tet t by signed volumes (sum to 1 up to rounding).
