@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 
+#include "gl_program.h"
 #include "gpu_device_impl.h"
 #include "gpu_mesh_layout.h"
 #include "gpu_tf_layout.h"
@@ -28,39 +29,6 @@ enum Binding : GLuint {
 };
 constexpr int kTile = 512;                     // pixels per side of one dispatch
 constexpr std::size_t kScalarBlock = 1 << 14;  // field values compared and re-sent per block
-
-std::string mib(std::size_t bytes) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
-  return buf;
-}
-
-GLuint compile_program(const GlApi& gl) {
-  const GLuint shader = gl.CreateShader(GL_COMPUTE_SHADER);
-  const char* src = gpu::kRayCastShader;
-  gl.ShaderSource(shader, 1, &src, nullptr);
-  gl.CompileShader(shader);
-  GLint ok = 0;
-  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetShaderInfoLog(shader, sizeof log, nullptr, log);
-    gl.DeleteShader(shader);
-    throw Error(ErrorCode::backend_unavailable, std::string("GPU backend: the ray-casting shader does not compile: ") + log);
-  }
-  const GLuint program = gl.CreateProgram();
-  gl.AttachShader(program, shader);
-  gl.LinkProgram(program);
-  gl.DeleteShader(shader);
-  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetProgramInfoLog(program, sizeof log, nullptr, log);
-    gl.DeleteProgram(program);
-    throw Error(ErrorCode::backend_unavailable, std::string("GPU backend: the ray-casting shader does not link: ") + log);
-  }
-  return program;
-}
 
 }  // namespace
 
@@ -92,8 +60,8 @@ void GpuRayCaster::Impl::allocate(const GlApi& gl, Binding b, std::size_t bytes,
   bytes = std::max<std::size_t>(bytes, 16);  // an empty storage buffer cannot be bound
   const auto limit = static_cast<std::size_t>(dev().info.max_storage_block_bytes);
   if (limit > 0 && bytes > limit)
-    throw Error(ErrorCode::out_of_memory, "GpuRayCaster: a storage buffer of " + mib(bytes) +
-                                              " exceeds the device's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " + mib(limit) +
+    throw Error(ErrorCode::out_of_memory, "GpuRayCaster: a storage buffer of " + gpu::mib(bytes) +
+                                              " exceeds the device's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " + gpu::mib(limit) +
                                               " (mesh of " + std::to_string(mesh->tet_count()) + " tets)");
   while (gl.GetError() != GL_NO_ERROR) {
   }
@@ -101,7 +69,7 @@ void GpuRayCaster::Impl::allocate(const GlApi& gl, Binding b, std::size_t bytes,
   const GLenum err = gl.GetError();
   if (err != GL_NO_ERROR)
     throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
-                "GpuRayCaster: allocating " + mib(bytes) + " on the device failed with " + gpu::gl_error_text(err));
+                "GpuRayCaster: allocating " + gpu::mib(bytes) + " on the device failed with " + gpu::gl_error_text(err));
   capacity[b] = bytes;
 }
 
@@ -161,11 +129,11 @@ GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<co
   const std::size_t needed = s.geometry_bytes + s.adjacency_bytes + s.scalar_bytes + s.acceleration_bytes;
   GpuDevice::Impl& d = m.dev();
   const std::string what = "GpuRayCaster: the mesh (" + std::to_string(s.tets) + " tets, " + std::to_string(s.points) +
-                           " points) needs " + mib(needed) + " on the device";
+                           " points) needs " + gpu::mib(needed) + " on the device";
   if (d.options.memory_limit_bytes > 0 && needed > d.options.memory_limit_bytes)
-    throw Error(ErrorCode::out_of_memory, what + " but the configured limit is " + mib(d.options.memory_limit_bytes));
+    throw Error(ErrorCode::out_of_memory, what + " but the configured limit is " + gpu::mib(d.options.memory_limit_bytes));
   if (d.info.free_memory_bytes >= 0 && needed > static_cast<std::size_t>(d.info.free_memory_bytes))
-    throw Error(ErrorCode::out_of_memory, what + " but only " + mib(static_cast<std::size_t>(d.info.free_memory_bytes)) +
+    throw Error(ErrorCode::out_of_memory, what + " but only " + gpu::mib(static_cast<std::size_t>(d.info.free_memory_bytes)) +
                                               " are free on " + d.info.gl_renderer);
   if (d.max_compute_storage_blocks < kBindingCount)
     throw Error(ErrorCode::backend_unavailable, "GPU backend: the device allows " +
@@ -175,7 +143,7 @@ GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<co
 
   CurrentContext current(d);
   const GlApi& gl = current.gl();
-  if (d.ray_cast_program == 0) d.ray_cast_program = compile_program(gl);
+  if (d.ray_cast_program == 0) d.ray_cast_program = gpu::compile_compute_program(gl, gpu::kRayCastShader, "ray-casting");
   gl.CreateBuffers(kBindingCount, m.buffers);
   try {
     m.allocate(gl, kPoints, layout.points.size() * sizeof(float), layout.points.data());

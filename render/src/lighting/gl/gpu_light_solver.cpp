@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "../../gpu/gl_program.h"
 #include "../../gpu/gpu_device_impl.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/gpu_ray_caster.h"
@@ -30,38 +31,6 @@ using gpu::GlApi;
 constexpr GLuint kGroupSize = 64;      // local_size_x of every kernel
 constexpr int kScatterBatch = 8;       // Jacobi iterations between two residual read-backs
 constexpr GLuint kLevel1Bindings = 13;  // storage blocks of light_level1.comp, the most of the three
-
-std::string mib(std::size_t bytes) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
-  return buf;
-}
-
-GLuint compile(const GlApi& gl, const char* source, const char* name) {
-  const GLuint shader = gl.CreateShader(GL_COMPUTE_SHADER);
-  gl.ShaderSource(shader, 1, &source, nullptr);
-  gl.CompileShader(shader);
-  GLint ok = 0;
-  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetShaderInfoLog(shader, sizeof log, nullptr, log);
-    gl.DeleteShader(shader);
-    throw Error(ErrorCode::backend_unavailable, std::string("GPU light volume: shader ") + name + " does not compile: " + log);
-  }
-  const GLuint program = gl.CreateProgram();
-  gl.AttachShader(program, shader);
-  gl.LinkProgram(program);
-  gl.DeleteShader(shader);
-  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetProgramInfoLog(program, sizeof log, nullptr, log);
-    gl.DeleteProgram(program);
-    throw Error(ErrorCode::backend_unavailable, std::string("GPU light volume: shader ") + name + " does not link: " + log);
-  }
-  return program;
-}
 
 /// One storage buffer, grown on demand.
 struct Buffer {
@@ -120,8 +89,8 @@ struct GpuLightSolver::Impl {
     bytes = std::max<std::size_t>(bytes, 16);  // an empty storage buffer cannot be bound
     const auto limit = static_cast<std::size_t>(dev().info.max_storage_block_bytes);
     if (limit > 0 && bytes > limit)
-      throw Error(ErrorCode::out_of_memory, "GPU light volume: a storage buffer of " + mib(bytes) +
-                                                " exceeds the device's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " + mib(limit));
+      throw Error(ErrorCode::out_of_memory, "GPU light volume: a storage buffer of " + gpu::mib(bytes) +
+                                                " exceeds the device's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of " + gpu::mib(limit));
     if (b.id == 0) gl.CreateBuffers(1, &b.id);
     while (gl.GetError() != GL_NO_ERROR) {
     }
@@ -129,7 +98,7 @@ struct GpuLightSolver::Impl {
     const GLenum err = gl.GetError();
     if (err != GL_NO_ERROR)
       throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
-                  "GPU light volume: allocating " + mib(bytes) + " on the device failed with " + gpu::gl_error_text(err));
+                  "GPU light volume: allocating " + gpu::mib(bytes) + " on the device failed with " + gpu::gl_error_text(err));
     b.bytes = bytes;
   }
   template <class T>
@@ -256,19 +225,19 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
   const std::size_t needed = pts.size() * 4 + tv.size() * 8 + inc.size() * 4 + edges.size() * 4 +
                              scatter_weights.size() * 4 + np * (3 * 12 + 16);
   const std::string what = "GPU light volume: the mesh (" + std::to_string(mesh.tets.size()) + " tets, " +
-                           std::to_string(np) + " points) needs " + mib(needed) + " on the device";
+                           std::to_string(np) + " points) needs " + gpu::mib(needed) + " on the device";
   if (d.options.memory_limit_bytes > 0 && needed > d.options.memory_limit_bytes)
-    throw Error(ErrorCode::out_of_memory, what + " but the configured limit is " + mib(d.options.memory_limit_bytes));
+    throw Error(ErrorCode::out_of_memory, what + " but the configured limit is " + gpu::mib(d.options.memory_limit_bytes));
   if (d.info.free_memory_bytes >= 0 && needed > static_cast<std::size_t>(d.info.free_memory_bytes))
-    throw Error(ErrorCode::out_of_memory, what + " but only " + mib(static_cast<std::size_t>(d.info.free_memory_bytes)) +
+    throw Error(ErrorCode::out_of_memory, what + " but only " + gpu::mib(static_cast<std::size_t>(d.info.free_memory_bytes)) +
                                               " are free on " + d.info.gl_renderer);
 
   CurrentContext current(d);
   const GlApi& gl = current.gl();
   try {
-    m.level0_program = compile(gl, gpu::kLightLevel0Shader, "light_level0.comp");
-    m.level1_program = compile(gl, gpu::kLightLevel1Shader, "light_level1.comp");
-    m.scatter_program = compile(gl, gpu::kLightScatterShader, "light_scatter.comp");
+    m.level0_program = gpu::compile_compute_program(gl, gpu::kLightLevel0Shader, "light-volume level-0");
+    m.level1_program = gpu::compile_compute_program(gl, gpu::kLightLevel1Shader, "light-volume level-1");
+    m.scatter_program = gpu::compile_compute_program(gl, gpu::kLightScatterShader, "light-volume scattering");
     m.upload(gl, m.mesh_points, pts);
     m.upload(gl, m.tets, tv);
     m.upload(gl, m.neighbors, nb);
