@@ -77,13 +77,8 @@ void ScatterSolver::start(const std::vector<float>& pre, const std::array<double
   for_blocks(np, [&](std::size_t b, std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       if (!in_system(v)) continue;
-      double neighbours[3] = {0, 0, 0};
-      for (auto s = topo.edge_offsets[v]; s < topo.edge_offsets[v + 1]; ++s) {
-        const auto q = static_cast<std::size_t>(topo.edge_ids[static_cast<std::size_t>(s)]);
-        if (!m_finite[q]) continue;
-        const double a = m_a[static_cast<std::size_t>(s)];
-        for (int c = 0; c < 3; ++c) neighbours[c] += a * m_x[3 * q + c];
-      }
+      double neighbours[3];
+      neighbour_sum(v, m_x, neighbours);
       for (int c = 0; c < 3; ++c) {
         if (!m_active[static_cast<std::size_t>(c)]) continue;
         const double diag = diagonal(v, c);
@@ -105,6 +100,18 @@ void ScatterSolver::start(const std::vector<float>& pre, const std::array<double
   for (std::size_t c = 0; c < 3; ++c) m_active[c] = m_active[c] && m_rz[c] > 0.0;
 }
 
+void ScatterSolver::neighbour_sum(std::size_t v, const std::vector<double>& values, double out[3]) const {
+  const Level1Topology& topo = *m_topology;
+  out[0] = out[1] = out[2] = 0.0;
+  for (auto s = topo.edge_offsets[v]; s < topo.edge_offsets[v + 1]; ++s) {
+    const auto q = static_cast<std::size_t>(topo.edge_ids[static_cast<std::size_t>(s)]);
+    const double a = m_a[static_cast<std::size_t>(s)];
+    out[0] += a * values[3 * q];
+    out[1] += a * values[3 * q + 1];
+    out[2] += a * values[3 * q + 2];
+  }
+}
+
 std::array<double, 3> ScatterSolver::multiply() {
   const Level1Topology& topo = *m_topology;
   const std::size_t np = m_a_sum.size();
@@ -112,15 +119,8 @@ std::array<double, 3> ScatterSolver::multiply() {
   for_blocks(np, [&](std::size_t b, std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       if (!in_system(v)) continue;
-      double neighbours[3] = {0, 0, 0};
-      for (auto s = topo.edge_offsets[v]; s < topo.edge_offsets[v + 1]; ++s) {
-        // Points out of the system have p = 0: no test needed.
-        const auto q = static_cast<std::size_t>(topo.edge_ids[static_cast<std::size_t>(s)]);
-        const double a = m_a[static_cast<std::size_t>(s)];
-        neighbours[0] += a * m_p[3 * q];
-        neighbours[1] += a * m_p[3 * q + 1];
-        neighbours[2] += a * m_p[3 * q + 2];
-      }
+      double neighbours[3];
+      neighbour_sum(v, m_p, neighbours);
       for (int c = 0; c < 3; ++c) {
         const double q = diagonal(v, c) * m_p[3 * v + c] - m_sigma[static_cast<std::size_t>(c)] * neighbours[c];
         m_q[3 * v + c] = q;

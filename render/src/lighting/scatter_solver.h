@@ -55,6 +55,9 @@ private:
 
   double diagonal(std::size_t v, int c) const { return m_a_sum[v] / 6.0 + m_sigma[static_cast<std::size_t>(c)] * m_finite_sum[v]; }
   bool in_system(std::size_t v) const { return m_finite[v] && m_a_sum[v] > 0.0; }
+  /// sum of a_vi values_i over v's neighbours, per channel. Points out of the system hold 0 in
+  /// x and p (non-finite sources start at 0; p is never set there), so no test is needed.
+  void neighbour_sum(std::size_t v, const std::vector<double>& values, double out[3]) const;
   /// q = M p over the points in the system; returns p . q per channel.
   std::array<double, 3> multiply();
   /// z = r / diag folded into p = z + beta p; returns r . z per channel and max |z|.
