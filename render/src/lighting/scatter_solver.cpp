@@ -113,7 +113,6 @@ void ScatterSolver::neighbour_sum(std::size_t v, const std::vector<double>& valu
 }
 
 std::array<double, 3> ScatterSolver::multiply() {
-  const Level1Topology& topo = *m_topology;
   const std::size_t np = m_a_sum.size();
   std::array<std::array<double, 3>, kBlocks> pq{};
   for_blocks(np, [&](std::size_t b, std::size_t begin, std::size_t end) {
