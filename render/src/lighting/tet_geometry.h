@@ -6,11 +6,12 @@
 #include <cstdint>
 
 #include "penumbra/render/tet_mesh.h"
+#include "walk_mesh.h"
 
 namespace penumbra::render::lighting {
 
-/// Local vertices of face j (the face opposite vertex j).
-inline constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+/// Local vertices of face j (the face opposite vertex j), outward for a positive tet.
+using detail::kFaceVertices;
 
 /// Plane of face j of tet t: outward normal n (not unit) and a point a on it. Computed from the
 /// face's vertices sorted by global id, so the two tets sharing a face get exactly opposite
