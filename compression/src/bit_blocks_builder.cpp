@@ -16,6 +16,7 @@ BitBlocks build_bit_blocks(
   const std::uint64_t groups = (vertex_count + G - 1) / G;
   BitBlocks blocks;
   blocks.widths.assign((vertex_count + 1) / 2, 0);
+  blocks.section_bits.assign(vertex_count, 0);
   std::vector<std::vector<std::uint8_t>> group_bytes(groups);
   parallel_for(groups, 8, [&](std::size_t gb, std::size_t ge) {
     for (std::size_t g = gb; g < ge; ++g) {
@@ -24,6 +25,7 @@ BitBlocks build_bit_blocks(
       BitWriter writer(bytes);
       group_encoder(first, last, [&](const VertexBitsEncoder& encode) {
         for (std::uint64_t v = first; v < last; ++v) {
+          blocks.section_bits[v] = std::uint32_t(writer.bit_count());
           const std::uint32_t w = encode(v, writer) & 0xF;
           // Two vertices share a width byte, and both lie in this group (G is even).
           blocks.widths[v >> 1] |= std::uint8_t(w << ((v & 1) * 4));

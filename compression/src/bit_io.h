@@ -43,6 +43,14 @@ inline std::uint32_t read_bits(const std::uint8_t* data, std::uint64_t pos, unsi
   return std::uint32_t((word >> (pos & 7)) & ((1ull << width) - 1));
 }
 
+/// read_bits without the width-0 shortcut (branch-free in a loop): reads the 8 bytes at
+/// pos / 8 even for width 0, so pos must lie within the payload or its padding.
+inline std::uint32_t read_bits_branchless(const std::uint8_t* data, std::uint64_t pos, unsigned width) {
+  std::uint64_t word;
+  std::memcpy(&word, data + (pos >> 3), 8);
+  return std::uint32_t((word >> (pos & 7)) & ((1ull << width) - 1));
+}
+
 inline std::uint32_t zigzag(std::int32_t v) { return (std::uint32_t(v) << 1) ^ std::uint32_t(v >> 31); }
 inline std::int32_t unzigzag(std::uint32_t u) { return std::int32_t(u >> 1) ^ -std::int32_t(u & 1); }
 

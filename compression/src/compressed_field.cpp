@@ -11,6 +11,7 @@
 #include "crc32.h"
 #include "file_layout.h"
 #include "page_format.h"
+#include "page_methods.h"
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/version.h"
 #include "penumbra/compression/window_codec.h"
@@ -60,9 +61,10 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
   if (std::memcmp(fixed, detail::kFileMagic, 8) != 0) fail(path, "not a Penumbra compressed field (bad magic)");
   detail::ByteReader hr(fixed + 8, sizeof fixed - 8, "compressed field '" + path + "': file header");
   const auto version = hr.get<std::uint32_t>();
-  if (version != std::uint32_t(kContainerFormatVersion))
-    fail(path, "format version " + std::to_string(version) + " is not supported (this build reads " +
+  if (version < 1 || version > std::uint32_t(kContainerFormatVersion))
+    fail(path, "format version " + std::to_string(version) + " is not supported (this build reads 1 to " +
                    std::to_string(kContainerFormatVersion) + ")");
+  f->m_version = version;
   const auto header_bytes = hr.get<std::uint32_t>();
   FieldInfo& info = f->m_info;
   info.vertex_count = hr.get<std::uint64_t>();
@@ -124,7 +126,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         e.bound = ir.get<float>();
         ir.get<std::uint32_t>();
         if (e.offset != expect_offset || e.first_step != expect_step || e.step_count < 1 ||
-            e.step_count > info.window || e.bytes < detail::PageHeader::kBytes || std::uint32_t(e.method) > 2)
+            e.step_count > info.window || e.bytes < detail::PageHeader::kBytes || std::uint32_t(e.method) > f->max_method())
           ir.fail("entry of " + page_name(i) + " is inconsistent");
         expect_offset += e.bytes;
         expect_step += e.step_count;
@@ -230,7 +232,12 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index)
   if (detail::crc32(payload, h.payload_bytes) != h.payload_crc)
     throw Error(ErrorCode::io_error, name + ": checksum mismatch (the page is corrupt)");
   return std::make_shared<const EncodedPage>(detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window,
-                                                                        m_info.codebook_size, name));
+                                                                        m_info.codebook_size, name, max_method()));
+}
+
+std::uint32_t CompressedField::max_method() const {
+  // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods.
+  return m_version >= 2 ? detail::kMaxMethod : std::uint32_t(PageMethod::predictive);
 }
 
 void CompressedField::read_step(std::uint64_t step, float* out) const {

@@ -5,6 +5,7 @@
 
 #include "byte_io.h"
 #include "crc32.h"
+#include "page_methods.h"
 #include "predictive_layout.h"
 #include "vertex_section.h"
 
@@ -12,8 +13,23 @@ namespace penumbra::compression::detail {
 
 namespace {
 
-bool has_vq(PageMethod m) { return m != PageMethod::predictive; }
-bool has_blocks(PageMethod m) { return m != PageMethod::vq; }
+bool has_vq(PageMethod m) { return uses_plain_vq(m); }
+bool has_blocks(PageMethod m) { return has_bit_blocks(m); }
+
+// Exception positions of a patched section strictly increase and lie inside the window: the
+// one-step decoder stops its scan at the first position past the step it wants.
+bool exceptions_increasing(const std::uint8_t* data, const VertexSection& s, const EncodedPage& p) {
+  const std::uint32_t count = p.method == PageMethod::predictive ? p.step_count - 1 : p.step_count;
+  const std::uint32_t pb = position_bits(count);
+  std::uint64_t at = s.values.exception_list;
+  std::int64_t previous = -1;
+  for (std::uint32_t e = 0; e < s.values.exceptions; ++e, at += pb + s.values.exception_width) {
+    const std::int64_t position = read_bits(data, at, pb);
+    if (position <= previous || position >= std::int64_t(count)) return false;
+    previous = position;
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -31,6 +47,16 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.put_array(p.mean_q);
     w.put_array(p.i8);
     w.put_array(p.iw);
+  }
+  if (uses_aligned_vq(p.method)) {
+    w.put(p.mean_lo);
+    w.put(p.mean_scale);
+    w.put(p.ca_lo);
+    w.put(p.ca_scale);
+    w.put_array(p.ca_q);
+    w.put_array(p.mean_q);
+    w.put_array(p.shift);
+    w.put_array(p.ia);
   }
   if (has_blocks(p.method)) {
     w.put(p.step);
@@ -82,9 +108,9 @@ bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
 }
 
 EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
-                               std::uint32_t K, const std::string& name) {
+                               std::uint32_t K, const std::string& name, std::uint32_t max_method) {
   ByteReader r(payload, h.payload_bytes, name);
-  if (h.method > 2) r.fail("unknown method " + std::to_string(h.method));
+  if (h.method > max_method) r.fail("unknown method " + std::to_string(h.method));
   if (h.step_count < 1 || h.step_count > W) r.fail("step count " + std::to_string(h.step_count) + " outside 1..window");
   EncodedPage p;
   p.method = PageMethod(h.method);
@@ -112,6 +138,23 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     for (std::uint64_t v = 0; v < N; ++v)
       if (p.i8[v] >= K || p.iw[v] >= K) r.fail("codebook index out of range at vertex " + std::to_string(v));
   }
+  if (uses_aligned_vq(p.method)) {
+    if (W > 256) r.fail("shift-aligned page with a window over 256 steps");
+    p.mean_lo = r.get<float>();
+    p.mean_scale = r.get<float>();
+    p.ca_lo = r.get<float>();
+    p.ca_scale = r.get<float>();
+    const std::uint32_t D = 2 * W - 1;
+    r.get_array(p.ca_q, std::uint64_t(K) * D);
+    p.ca.resize(p.ca_q.size());
+    for (std::size_t i = 0; i < p.ca_q.size(); ++i) p.ca[i] = p.ca_lo + float(p.ca_q[i]) * p.ca_scale;
+    r.get_array(p.mean_q, N);
+    r.get_array(p.shift, N);
+    r.get_array(p.ia, N);
+    for (std::uint64_t v = 0; v < N; ++v)
+      if (p.ia[v] >= K || p.shift[v] >= h.step_count)
+        r.fail("aligned codebook index or shift out of range at vertex " + std::to_string(v));
+  }
   if (has_blocks(p.method)) {
     p.step = r.get<float>();
     p.lo = r.get<float>();
@@ -133,12 +176,18 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     // Every group's sections must fill exactly its bytes, each parsed without reading past
     // its group: the decoder then never reads outside the payload.
     VertexSection s;
+    // A group holds at most 128 raw sections of 1024 float32 values: 2^22 bits, so the
+    // per-vertex offsets fit 32 bits.
+    p.blocks.section_bits.resize(N);
     for (std::uint64_t g = 0; g < groups; ++g) {
       std::uint64_t pos = p.blocks.group_offsets[g] * 8;
       const std::uint64_t limit = p.blocks.group_offsets[g + 1] * 8;
       for (std::uint64_t v = g * BitBlocks::kGroupSize; v < std::min(N, (g + 1) * BitBlocks::kGroupSize); ++v) {
+        p.blocks.section_bits[v] = std::uint32_t(pos - p.blocks.group_offsets[g] * 8);
         if (!parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), limit, s))
           r.fail("bits of vertex " + std::to_string(v) + " run past their group");
+        if (s.code == kPatchedCode && !exceptions_increasing(p.blocks.payload.data(), s, p))
+          r.fail("exception list of vertex " + std::to_string(v) + " is out of order");
         pos = s.end;
       }
       if ((pos + 7) / 8 != p.blocks.group_offsets[g + 1])

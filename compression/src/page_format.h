@@ -1,4 +1,13 @@
 // compression/src/page_format.h -- one window as one page of bytes, and back (private).
+//
+// Payload, after the 64-byte header, in this order (little-endian):
+//   f64 times[steps]
+//   vq, vq_residual:       f32 mean lo, f32 mean scale, f32 c8[K x 8], f32 cw[K x steps]
+//                          (each entry's first `steps` values), u16 mean[N], u8 i8[N], u8 iw[N]
+//   vq_aligned(_residual): f32 level lo, f32 level scale, f32 ca lo, f32 ca scale,
+//   (version 2)            u16 ca[K x (2W - 1)], u16 level[N], u8 shift[N], u8 entry[N]
+//   *_residual, predictive: f32 step, f32 lo, u32 first width, u32 0, u64 group offsets
+//                          [groups + 1], 4-bit codes [N], bit payload (vertex_section.h)
 #pragma once
 #include <cstdint>
 #include <string>
@@ -30,7 +39,9 @@ bool parse_page_header(const std::uint8_t* bytes, PageHeader& header);
 
 /// Parses a payload whose checksum was verified; every size and index is checked, so a
 /// malformed payload throws Error(io_error) naming `page_name` instead of reading out of bounds.
+/// `max_method`: the highest PageMethod the file's format version knows (version 1: 2).
 EncodedPage parse_page_payload(const PageHeader& header, const std::uint8_t* payload, std::uint64_t vertex_count,
-                               std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name);
+                               std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,
+                               std::uint32_t max_method);
 
 }  // namespace penumbra::compression::detail

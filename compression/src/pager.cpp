@@ -9,15 +9,26 @@
 
 namespace penumbra::compression {
 
+namespace {
+
+// Memory a page takes once loaded, from its index entry: its bytes on disk, plus the
+// per-vertex section offsets derived at load time for pages with bit blocks (4 bytes per vertex).
+std::uint64_t loaded_bytes(const CompressedField& field, const PageEntry& page) {
+  return page.bytes + (page.method == PageMethod::vq ? 0 : field.info().vertex_count * 4);
+}
+
+}  // namespace
+
 Pager::Pager(std::shared_ptr<const CompressedField> field, PagerOptions options)
     : m_field(std::move(field)), m_options(options) {
   require(m_field != nullptr, "Pager: null field");
   if (m_options.memory_cap_bytes)
     for (std::size_t i = 0; i < m_field->page_count(); ++i)
-      if (m_field->page(i).bytes > m_options.memory_cap_bytes)
+      if (loaded_bytes(*m_field, m_field->page(i)) > m_options.memory_cap_bytes)
         throw Error(ErrorCode::out_of_memory, "Pager: memory cap of " + std::to_string(m_options.memory_cap_bytes) +
-                                                  " bytes is below the " + std::to_string(m_field->page(i).bytes) +
-                                                  " bytes of page " + std::to_string(i));
+                                                  " bytes is below the " +
+                                                  std::to_string(loaded_bytes(*m_field, m_field->page(i))) +
+                                                  " bytes of loaded page " + std::to_string(i));
   if (m_options.prefetch) {
     m_thread = std::thread([this] { prefetch_loop(); });
     // Playback usually starts at step 0: have its page on the way before the first read.
@@ -61,11 +72,11 @@ void Pager::evict_locked(std::size_t keep_a, std::size_t keep_b) {
 void Pager::request_prefetch_locked(std::size_t page) {
   if (!m_options.prefetch || page >= m_field->page_count() || m_resident.count(page) || m_loading == page) return;
   if (m_options.memory_cap_bytes) {
-    // On-disk size stands in for the loaded size (they differ by a few vector headers).
+    // The index entry stands in for the loaded size (they differ by a few vector headers).
     std::uint64_t held = 0;
     for (const auto& [index, data] : m_resident)
       if (index == m_current) held += data->resident_bytes();
-    if (held + m_field->page(page).bytes + 4096 > m_options.memory_cap_bytes) return;
+    if (held + loaded_bytes(*m_field, m_field->page(page)) + 4096 > m_options.memory_cap_bytes) return;
   }
   m_request = page;
   m_wake.notify_all();
@@ -133,7 +144,7 @@ void Pager::read_step(std::uint64_t step, float* out) {
     }
     request_prefetch_locked(page + 1);
   }
-  decode_step(*data, std::uint32_t(step - data->first_step), out);
+  m_cursor.decode(data, std::uint32_t(step - data->first_step), out);
 }
 
 }  // namespace penumbra::compression

@@ -16,8 +16,17 @@ std::uint64_t StreamingEncoder::required_budget(std::uint64_t n, const CodecPara
   // byte per step at worst before the raw escape, counted at 2 here); per sample vertex: the
   // series and its closed-loop residual; two codebooks.
   const std::uint64_t sample = std::min<std::uint64_t>(n, c.training_sample);
-  const std::uint64_t working = n * (8 + 4 + 4 + 2ull * c.window) + sample * c.window * 4 * 2 +
-                                std::uint64_t(c.codebook_size) * (c.window + 8) * 4 * 2;
+  std::uint64_t working = n * (8 + 4 + 4 + 2ull * c.window) + sample * c.window * 4 * 2 +
+                          std::uint64_t(c.codebook_size) * (c.window + 8) * 4 * 2;
+  // Section offsets of a page with bit blocks (4 bytes per vertex).
+  working += n * 4;
+  if (c.aligned && c.window <= 256) {
+    // Shift-aligned stage: per vertex shift, level (float, 16-bit, dequantised) and index;
+    // the sample's frames of 2W-1 values (all, and the half it trains on); the aligned
+    // codebook as trained, stored and dequantised, twice when a cold start is tried as well.
+    const std::uint64_t frame = 2ull * c.window - 1;
+    working += n * (1 + 4 + 2 + 4 + 1) + sample * frame * 4 * 3 / 2 + std::uint64_t(c.codebook_size) * frame * 10 * 2;
+  }
   return buffers * window + working;
 }
 

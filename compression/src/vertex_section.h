@@ -1,7 +1,9 @@
 // compression/src/vertex_section.h -- one vertex's bits in a page's BitBlocks (private).
-//   vq_residual: values (value_layout.h) of zigzag(q_t), t < n
+//   vq_residual, vq_aligned_residual: values (value_layout.h) of zigzag(q_t), t < n
 //   predictive:  1-bit predictor, k_0 (first_width bits), values of the n-1 prediction errors
-//   raw (code 15, either method): n float32 values
+//   raw (code 15, any method): n float32 values
+// Sections follow each other without gaps inside a group; BitBlocks::section_bits (derived
+// when a page is built or parsed) holds where each one starts.
 #pragma once
 #include <cstdint>
 

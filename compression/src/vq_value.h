@@ -10,6 +10,16 @@ inline float dequantise_mean(float lo, float scale, std::uint16_t q) { return lo
 
 inline float vq_value(float mean, float c8, float cw) { return (mean + c8) + cw; }
 
+/// Shift-aligned VQ: the vertex's level plus its entry's value at frame position
+/// t + window - 1 - shift.
+inline float aligned_value(float level, float c) { return level + c; }
+inline std::uint32_t aligned_frame_start(std::uint32_t window, std::uint32_t shift) { return window - 1 - shift; }
+inline void aligned_series(float level, const float* entry, std::uint32_t window, std::uint32_t shift,
+                           std::uint32_t steps, float* out) {
+  const float* c = entry + aligned_frame_start(window, shift);
+  for (std::uint32_t t = 0; t < steps; ++t) out[t] = aligned_value(level, c[t]);
+}
+
 /// The W values of one vertex-window: c8 is the vertex's D8 entry, cw its D_W entry.
 inline void vq_series(float mean, const float* c8, const float* cw, std::uint32_t window, float* out) {
   const std::uint32_t block = window / 8;

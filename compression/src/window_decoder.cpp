@@ -1,9 +1,11 @@
 // compression/src/window_decoder.cpp -- decodes a page: one step, the whole window, or one vertex.
 #include <algorithm>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "bit_io.h"
+#include "page_methods.h"
 #include "predictive_layout.h"
 #include "vertex_section.h"
 #include "penumbra/compression/window_codec.h"
@@ -20,7 +22,24 @@ constexpr std::uint64_t kGroup = BitBlocks::kGroupSize;
 // starting threads costs more than the decode (about 1 ns per vertex) itself.
 constexpr std::size_t kStepChunk = 1 << 18;
 
-bool is_vq(const EncodedPage& p) { return p.method != PageMethod::predictive; }
+bool is_vq(const EncodedPage& p) { return detail::uses_plain_vq(p.method); }
+bool is_aligned(const EncodedPage& p) { return detail::uses_aligned_vq(p.method); }
+bool has_residual(const EncodedPage& p) {
+  return p.method == PageMethod::vq_residual || p.method == PageMethod::vq_aligned_residual;
+}
+
+// One step of shift-aligned VQ for vertices [b, e): each vertex reads its entry at frame
+// position t + W - 1 - shift.
+void aligned_base_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
+  const std::uint32_t D = 2 * p.window - 1;
+  const float* ca = p.ca.data() + (p.window - 1 + t);
+  const std::uint16_t* mq = p.mean_q.data();
+  const std::uint8_t* ia = p.ia.data();
+  const std::uint8_t* shift = p.shift.data();
+  for (std::uint64_t v = b; v < e; ++v)
+    out[v] = detail::aligned_value(detail::dequantise_mean(p.mean_lo, p.mean_scale, mq[v]),
+                                   ca[std::ptrdiff_t(ia[v]) * D - shift[v]]);
+}
 
 // Column t of both codebooks: the 2 x K floats a one-step decode looks up.
 void step_tables(const EncodedPage& p, std::uint32_t t, std::vector<float>& t8, std::vector<float>& tw) {
@@ -58,34 +77,131 @@ __attribute__((target_clones("avx2", "default"))) void add_dw(const float* tw, c
   for (std::uint64_t i = 0; i < count; ++i) out[i] = base[i] + tw[iw[i]];
 }
 
-// Value of step t for a vertex whose section was parsed (vq_residual: added to out).
-float section_step(const EncodedPage& p, const std::uint8_t* data, const detail::VertexSection& s, std::uint32_t t,
-                   float current) {
-  if (s.code == BitBlocks::kRawWidth) return detail::bits_float(detail::read_bits(data, s.start + 32ull * t, 32));
-  if (p.method == PageMethod::predictive) {
-    std::int64_t k = std::int64_t(s.first_value), k2 = k;
-    for (std::uint32_t i = 1; i <= t; ++i) {
-      const std::int64_t next = detail::predict(s.predictor, i, k, k2) +
-                                detail::unzigzag(detail::value_at(data, s.values, p.step_count - 1, i - 1));
-      k2 = k;
-      k = next;
-    }
-    return p.lo + float(k) * p.step;
+// Zigzag value `i` of a patched span at bit `pos` (value_layout.h), inlined for the one-step
+// loop: the exception list is in increasing position order (checked when a page is parsed),
+// so the scan stops at the first position >= i; most steps read one slot.
+inline std::uint32_t patched_value(const std::uint8_t* data, std::uint64_t pos, std::uint32_t pb, std::uint32_t i) {
+  const std::uint32_t h = detail::read_bits(data, pos, detail::kPatchedHeaderBits);
+  const std::uint32_t w = h & 0xF, c = (h >> 4) & 0xF, ew = h >> 8;
+  const std::uint32_t entry = pb + ew;
+  std::uint64_t at = pos + detail::kPatchedHeaderBits;
+  for (std::uint32_t e = 0; e < c; ++e, at += entry) {
+    std::uint64_t word;
+    std::memcpy(&word, data + (at >> 3), 8);
+    word >>= at & 7;  // >= 57 valid bits; an entry has at most 10 + 31
+    const std::uint32_t position = std::uint32_t(word & ((1ull << pb) - 1));
+    if (position == i) return std::uint32_t((word >> pb) & ((1ull << ew) - 1));
+    if (position > i) break;
   }
-  if (s.values.width == 0 && s.values.exceptions == 0) return current;
-  return current + float(detail::unzigzag(detail::value_at(data, s.values, p.step_count, t))) * p.step;
+  const std::uint64_t slots = pos + detail::kPatchedHeaderBits + std::uint64_t(c) * entry;
+  return detail::read_bits(data, slots + std::uint64_t(i) * w, w);
 }
 
-// Adds the residual of step t (vq_residual) or writes the value (predictive) for one group.
-void blocks_step_group(const EncodedPage& p, std::uint64_t g, std::uint32_t t, float* out) {
-  const std::uint64_t first = g * kGroup, last = std::min(p.vertex_count, first + kGroup);
+// out[i] = level[i] + ca_t[offset[i]]: the hot loop of a full-window decode of an aligned page.
+__attribute__((target_clones("avx2", "default"))) void add_aligned(const float* ca_t, const std::int32_t* offset,
+                                                                      const float* level, std::uint64_t count,
+                                                                      float* out) {
+  for (std::uint64_t i = 0; i < count; ++i) out[i] = detail::aligned_value(level[i], ca_t[offset[i]]);
+}
+
+// Adds the residual of step t to the VQ base of vertices [b, e) of a page with a residual:
+// one read at a known offset and width per vertex (section offsets), no walk over a group.
+// Plain sections (codes 0..13) go branch-free in a first pass; patched and raw ones, whose
+// codes would mispredict a branch per vertex, are listed and done in a second.
+void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
   const std::uint8_t* data = p.blocks.payload.data();
-  std::uint64_t pos = p.blocks.group_offsets[g] * 8;
+  const std::uint32_t pb = detail::position_bits(p.step_count);
+  const float step = p.step;
+  thread_local std::vector<std::uint32_t> special;
+  special.clear();
+  const std::uint8_t* widths = p.blocks.widths.data();
+  for (std::uint64_t v = b; v < e; ++v) {
+    if ((v & 15) == 0 && v + 16 <= e) {
+      // Sparse residuals (most codes 0) skip 16 vertices per 8-byte load of their codes.
+      std::uint64_t codes;
+      std::memcpy(&codes, widths + v / 2, 8);
+      if (codes == 0) {
+        v += 15;
+        continue;
+      }
+    }
+    const std::uint32_t code = p.blocks.width(v);
+    if (code >= detail::kPatchedCode) special.push_back(std::uint32_t(v - b));
+    // Width 0 for special sections: reads nothing past their start (inside the payload).
+    const std::uint32_t w = code < detail::kPatchedCode ? code : 0;
+    const std::uint32_t z = detail::read_bits_branchless(data, p.blocks.section_start(v) + std::uint64_t(t) * w, w);
+    // Code 0 (all zero) leaves the VQ value untouched, as decode_window does (keeps -0.0f).
+    const float with_residual = out[v] + float(detail::unzigzag(z)) * step;
+    out[v] = w ? with_residual : out[v];
+  }
+  for (const std::uint32_t i : special) {
+    const std::uint64_t v = b + i;
+    const std::uint64_t pos = p.blocks.section_start(v);
+    if (p.blocks.width(v) == detail::kPatchedCode)
+      out[v] = out[v] + float(detail::unzigzag(patched_value(data, pos, pb, t))) * step;
+    else
+      out[v] = detail::bits_float(detail::read_bits(data, pos + 32ull * t, 32));
+  }
+}
+
+// k_t of a predictive section from k_0 and its prediction errors (O(t): each value depends on
+// the ones before it), and k_{t-1} in *previous. `scratch` holds step_count integers.
+std::int64_t predictive_k(const EncodedPage& p, const std::uint8_t* data, const detail::VertexSection& s,
+                          std::uint32_t t, std::uint32_t* scratch, std::int64_t* previous = nullptr) {
+  std::int64_t k = std::int64_t(s.first_value), k2 = k;
+  if (t > 0) detail::all_values(data, s.values, p.step_count - 1, scratch);
+  for (std::uint32_t i = 1; i <= t; ++i) {
+    const std::int64_t next = detail::predict(s.predictor, i, k, k2) + detail::unzigzag(scratch[i - 1]);
+    k2 = k;
+    k = next;
+  }
+  if (previous) *previous = k2;
+  return k;
+}
+
+// Step t of a predictive page for vertices [b, e), each from the start of its section; k1/k2
+// (optional) receive k_t and k_{t-1} for a StepCursor.
+void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
+                           std::int64_t* k1 = nullptr, std::int64_t* k2 = nullptr) {
+  const std::uint8_t* data = p.blocks.payload.data();
+  thread_local std::vector<std::uint32_t> scratch;
+  scratch.resize(p.step_count);
   detail::VertexSection s;
-  for (std::uint64_t v = first; v < last; ++v) {
-    detail::parse_vertex(p, data, pos, p.blocks.width(v), kNoLimit, s);
-    out[v] = section_step(p, data, s, t, out[v]);
-    pos = s.end;
+  for (std::uint64_t v = b; v < e; ++v) {
+    detail::parse_vertex(p, data, p.blocks.section_start(v), p.blocks.width(v), kNoLimit, s);
+    if (s.code == BitBlocks::kRawWidth) {
+      out[v] = detail::bits_float(detail::read_bits(data, s.start + 32ull * t, 32));
+      continue;
+    }
+    std::int64_t previous;
+    const std::int64_t k = predictive_k(p, data, s, t, scratch.data(), &previous);
+    out[v] = p.lo + float(k) * p.step;
+    if (k1) k1[v] = k, k2[v] = previous;
+  }
+}
+
+// Step t of a predictive page from each vertex's k_{t-1}, k_{t-2} (updated in place): O(1).
+void predictive_advance_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
+                              std::int64_t* k1, std::int64_t* k2) {
+  const std::uint8_t* data = p.blocks.payload.data();
+  const std::uint32_t pb = detail::position_bits(p.step_count - 1);
+  for (std::uint64_t v = b; v < e; ++v) {
+    const std::uint32_t code = p.blocks.width(v);
+    const std::uint64_t pos = p.blocks.section_start(v);
+    if (code == BitBlocks::kRawWidth) {
+      out[v] = detail::bits_float(detail::read_bits(data, pos + 32ull * t, 32));
+      continue;
+    }
+    // Section: predictor bit, k_0, then the prediction errors (vertex_section.h).
+    const std::uint32_t predictor = detail::read_bits(data, pos, 1);
+    const std::uint64_t values = pos + 1 + p.first_width;
+    const std::uint32_t z = code == detail::kPatchedCode
+                                ? patched_value(data, values, pb, t - 1)
+                                : detail::read_bits(data, values + std::uint64_t(t - 1) * code, code);
+    const std::int64_t k = detail::predict(predictor, t, k1[v], k2[v]) + detail::unzigzag(z);
+    k2[v] = k1[v];
+    k1[v] = k;
+    out[v] = p.lo + float(k) * p.step;
   }
 }
 
@@ -120,15 +236,49 @@ void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
   require(t < p.step_count, "decode_step: step " + std::to_string(t) + " is outside the page's " +
                                 std::to_string(p.step_count) + " steps");
   const std::uint64_t N = p.vertex_count;
-  if (is_vq(p)) {
-    std::vector<float> t8, tw;
-    step_tables(p, t, t8, tw);
-    parallel_for(N, kStepChunk, [&](std::size_t b, std::size_t e) { vq_base_range(p, t8.data(), tw.data(), b, e, out); });
+  if (p.method == PageMethod::predictive) {
+    parallel_for(N, kStepChunk / 4, [&](std::size_t b, std::size_t e) { predictive_step_range(p, t, b, e, out); });
+    return;
   }
-  if (p.method != PageMethod::vq) {
-    const std::uint64_t groups = (N + kGroup - 1) / kGroup;
-    parallel_for(groups, 64, [&](std::size_t b, std::size_t e) {
-      for (std::size_t g = b; g < e; ++g) blocks_step_group(p, g, t, out);
+  std::vector<float> t8, tw;
+  if (is_vq(p)) step_tables(p, t, t8, tw);
+  // VQ base and residual in one pass per chunk, while the chunk's outputs are in cache.
+  const std::size_t chunk = has_residual(p) ? kStepChunk / 8 : is_vq(p) ? kStepChunk : kStepChunk / 4;
+  parallel_for(N, chunk, [&](std::size_t b, std::size_t e) {
+    if (is_vq(p))
+      vq_base_range(p, t8.data(), tw.data(), b, e, out);
+    else
+      aligned_base_range(p, t, b, e, out);
+    if (has_residual(p)) residual_step_range(p, t, b, e, out);
+  });
+}
+
+void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uint32_t t, float* out) {
+  require(page != nullptr, "StepCursor::decode: null page");
+  const EncodedPage& p = *page;
+  if (p.method != PageMethod::predictive) {
+    m_page.reset();
+    decode_step(p, t, out);
+    return;
+  }
+  require(out != nullptr, "StepCursor::decode: null output");
+  require(t < p.step_count, "StepCursor::decode: step " + std::to_string(t) + " is outside the page's " +
+                                std::to_string(p.step_count) + " steps");
+  const std::uint64_t N = p.vertex_count;
+  const bool follows = m_page == page && t == m_step + 1;
+  if (m_page != page) {
+    m_page = page;
+    m_k1.assign(N, 0);
+    m_k2.assign(N, 0);
+  }
+  m_step = t;
+  if (follows) {
+    parallel_for(N, kStepChunk / 8, [&](std::size_t b, std::size_t e) {
+      predictive_advance_range(p, t, b, e, out, m_k1.data(), m_k2.data());
+    });
+  } else {
+    parallel_for(N, kStepChunk / 4, [&](std::size_t b, std::size_t e) {
+      predictive_step_range(p, t, b, e, out, m_k1.data(), m_k2.data());
     });
   }
 }
@@ -163,7 +313,21 @@ void decode_window(const EncodedPage& p, float* out) {
         add_dw(t8 + p.codebook_size, p.iw.data() + b, base.data(), e - b, out + std::uint64_t(t) * N + b);
       }
     }
-    if (p.method == PageMethod::vq) return;
+    if (is_aligned(p)) {
+      // Level and entry offset of each vertex once; then one lookup and add per value.
+      thread_local std::vector<float> level;
+      thread_local std::vector<std::int32_t> offset;
+      level.resize(e - b);
+      offset.resize(e - b);
+      const std::int32_t D = std::int32_t(2 * p.window - 1);
+      for (std::uint64_t v = b; v < e; ++v) {
+        level[v - b] = detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]);
+        offset[v - b] = std::int32_t(p.ia[v]) * D - std::int32_t(p.shift[v]);
+      }
+      for (std::uint32_t t = 0; t < n; ++t)
+        add_aligned(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b, out + std::uint64_t(t) * N + b);
+    }
+    if (!has_residual(p) && p.method != PageMethod::predictive) return;
     std::vector<std::uint32_t> scratch(n);
     detail::VertexSection s;
     for (std::uint64_t g = b / kGroup; g * kGroup < e; ++g) {
@@ -188,16 +352,14 @@ void decode_vertex(const EncodedPage& p, std::uint64_t v, float* out) {
                       p.cw.data() + std::size_t(p.iw[v]) * p.window, p.window, series.data());
     std::copy(series.begin(), series.begin() + p.step_count, out);
   }
-  if (p.method == PageMethod::vq) return;
-  const std::uint64_t g = v / kGroup;
-  std::uint64_t pos = p.blocks.group_offsets[g] * 8;
+  if (is_aligned(p))
+    detail::aligned_series(detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]),
+                           p.ca.data() + std::size_t(p.ia[v]) * (2 * p.window - 1), p.window, p.shift[v], p.step_count,
+                           out);
+  if (!has_residual(p) && p.method != PageMethod::predictive) return;
   detail::VertexSection s;
-  for (std::uint64_t u = g * kGroup; u < v; ++u) {
-    detail::parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(u), kNoLimit, s);
-    pos = s.end;
-  }
   std::vector<std::uint32_t> scratch(p.step_count);
-  detail::parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), kNoLimit, s);
+  detail::parse_vertex(p, p.blocks.payload.data(), p.blocks.section_start(v), p.blocks.width(v), kNoLimit, s);
   section_all(p, p.blocks.payload.data(), s, out, 1, scratch.data());
 }
 

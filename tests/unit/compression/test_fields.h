@@ -64,6 +64,24 @@ inline SyntheticField shock_front(std::uint64_t n, std::uint32_t steps) {
   return f;
 }
 
+/// A blast-like front: ahead of it a level that varies in space; at its arrival (a different,
+/// non-integer time at every vertex) a jump of about 1.5 that relaxes exponentially. One
+/// plain codebook entry per arrival step would be needed; aligned at the jump, one shape.
+inline SyntheticField relaxing_front(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    f.times[t] = t;
+    const double s = double(t) / steps, front = -0.05 + 1.1 * s, strength = 1.5 / (1 + 0.5 * s);
+    for (std::uint64_t v = 0; v < n; ++v) {
+      double x, y;
+      vertex_position(v, n, x, y);
+      const double ahead = 1.0 + 0.2 * y;
+      f.values[t * n + v] = float(x < front ? ahead + strength * std::exp(-(front - x) / 0.2) : ahead);
+    }
+  }
+  return f;
+}
+
 /// Independent noise at every value: nothing for VQ to exploit.
 inline SyntheticField white_noise(std::uint64_t n, std::uint32_t steps, std::uint64_t seed = 5) {
   SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};

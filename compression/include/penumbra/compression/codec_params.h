@@ -33,6 +33,12 @@ struct CodecParams {
   std::uint32_t search_candidates = 2;
   /// Seed of the sampling and split perturbations; equal seeds give equal files.
   std::uint64_t seed = 1;
+  /// Also train a shift-aligned codebook per window (each vertex-window shifted so that its
+  /// largest step-to-step change lands at one frame position; see PageMethod::vq_aligned)
+  /// and keep it for pages where it represents the training sample better. Helps fields
+  /// with moving fronts (a jump at a different step at every vertex); costs training time
+  /// (about +40..75% of the plain codebooks' training). Windows up to 256 steps.
+  bool aligned = true;
   /// Optional guaranteed maximum error at every value.
   ErrorBound bound;
   /// Without a bound: a window whose VQ signal-to-noise ratio (on the training sample) is
@@ -45,6 +51,12 @@ enum class PageMethod : std::uint32_t {
   vq = 0,           ///< mean + D8 + D_W codebooks, 4 bytes per vertex
   vq_residual = 1,  ///< vq plus a quantised residual that holds the error bound
   predictive = 2,   ///< error-bounded temporal predictive coder (VQ-poor fields)
+  /// Shift-aligned VQ (format version 2): per vertex a 16-bit level, a shift and an index
+  /// into a codebook over a frame of 2W-1 steps; the vertex-window is the level plus the
+  /// entry's W steps starting at W-1-shift, i.e. the entry's jump at frame position W-1
+  /// lands on the vertex's step `shift`. 4 bytes per vertex, codebook stored in 16 bits.
+  vq_aligned = 3,
+  vq_aligned_residual = 4,  ///< vq_aligned plus a quantised residual that holds the error bound
 };
 
 const char* to_string(PageMethod method);

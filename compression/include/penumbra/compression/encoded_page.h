@@ -17,9 +17,17 @@ struct BitBlocks {
   std::vector<std::uint64_t> group_offsets;  ///< byte offset of each group, plus the end
   std::vector<std::uint8_t> widths;          ///< two 4-bit widths per byte, low nibble first
   std::vector<std::uint8_t> payload;         ///< bits, LSB first; 8 bytes of padding at the end
+  /// Derived, not stored in the file (filled by the encoder and by the page parser, which
+  /// walks every section anyway): bit offset of each vertex's section from its group's
+  /// start. It makes one step of one vertex an O(1) read (known offset and width) instead of
+  /// a walk over the group, for 4 bytes per vertex of memory.
+  std::vector<std::uint32_t> section_bits;
 
   std::uint32_t width(std::uint64_t vertex) const {
     return (widths[vertex >> 1] >> ((vertex & 1) * 4)) & 0xF;
+  }
+  std::uint64_t section_start(std::uint64_t vertex) const {
+    return group_offsets[vertex / kGroupSize] * 8 + section_bits[vertex];
   }
   bool empty() const { return group_offsets.empty(); }
 };
@@ -28,6 +36,8 @@ struct BitBlocks {
 /// Reconstruction of step t (0 <= t < step_count) at vertex v, in float, in this order:
 ///   vq:           ((mean(v) + c8[i8[v]][t / (window/8)]) + cw[iw[v]][t])
 ///   vq_residual:  vq + float(q) * step, or the stored exact value for raw vertices
+///   vq_aligned:   mean(v) + ca[ia[v]][t + window - 1 - shift[v]]  (mean(v) is the level)
+///   vq_aligned_residual: vq_aligned + float(q) * step, or raw values
 ///   predictive:   lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
 /// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale.
 struct EncodedPage {
@@ -52,7 +62,14 @@ struct EncodedPage {
   std::vector<std::uint16_t> mean_q;
   std::vector<std::uint8_t> i8, iw;
 
-  // vq_residual (quantised residual, zigzag) and predictive (zigzag deltas)
+  // vq_aligned / vq_aligned_residual (mean_q, mean_lo, mean_scale hold the level)
+  std::vector<float> ca;             ///< codebook_size x (2 window - 1): ca_lo + float(ca_q) * ca_scale
+  std::vector<std::uint16_t> ca_q;   ///< the codebook as stored
+  float ca_lo = 0, ca_scale = 0;
+  std::vector<std::uint8_t> shift;   ///< step at which the vertex's entry is aligned, < step_count
+  std::vector<std::uint8_t> ia;      ///< entry of ca
+
+  // vq_residual, vq_aligned_residual (quantised residual, zigzag) and predictive (zigzag deltas)
   float step = 0;
   float lo = 0;                ///< predictive: value of k = 0
   std::uint32_t first_width = 0;  ///< predictive: bits of k_0

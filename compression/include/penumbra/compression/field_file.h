@@ -90,6 +90,8 @@ public:
   /// Index of the page holding global step t (throws for t >= step_count()).
   std::size_t page_of_step(std::uint64_t step) const;
   std::uint64_t file_bytes() const { return m_file_bytes; }
+  /// Container format version the file was written with (1 .. kContainerFormatVersion).
+  std::uint32_t format_version() const { return m_version; }
   /// Bytes the field would take uncompressed (float32).
   std::uint64_t raw_bytes() const { return step_count() * m_info.vertex_count * 4; }
 
@@ -109,6 +111,8 @@ private:
   std::vector<double> m_times;
   float m_min = 0, m_max = 0;
   std::uint64_t m_file_bytes = 0;
+  std::uint32_t m_version = 0;
+  std::uint32_t max_method() const;
 };
 
 }  // namespace penumbra::compression

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "penumbra/compression/field_file.h"
+#include "penumbra/compression/window_codec.h"
 
 namespace penumbra::compression {
 
@@ -59,6 +60,7 @@ private:
   std::size_t m_request = kNone, m_loading = kNone, m_current = kNone;
   bool m_stop = false;
   PagerStats m_stats;
+  StepCursor m_cursor;  ///< O(1) sequential steps of predictive pages
   std::thread m_thread;
 };
 

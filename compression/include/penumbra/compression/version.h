@@ -2,6 +2,10 @@
 #pragma once
 
 namespace penumbra::compression {
-/// Version of the compressed field-history container format this build writes.
-constexpr int kContainerFormatVersion = 1;
+/// Version of the compressed field-history container format this build writes. Readers take
+/// every version up to this one:
+///   1  pages vq, vq_residual, predictive
+///   2  adds the shift-aligned pages (vq_aligned, vq_aligned_residual); layouts of the
+///      version-1 page kinds are unchanged, so a version-1 file reads as before
+constexpr int kContainerFormatVersion = 2;
 }  // namespace penumbra::compression

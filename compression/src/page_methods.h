@@ -1,0 +1,19 @@
+// compression/src/page_methods.h -- what each PageMethod stores (private).
+#pragma once
+#include "penumbra/compression/codec_params.h"
+
+namespace penumbra::compression::detail {
+
+/// mean + D8 + D_W codebooks (c8, cw, mean_q, i8, iw).
+inline bool uses_plain_vq(PageMethod m) { return m == PageMethod::vq || m == PageMethod::vq_residual; }
+/// level + shift-aligned codebook (ca, mean_q, shift, ia).
+inline bool uses_aligned_vq(PageMethod m) {
+  return m == PageMethod::vq_aligned || m == PageMethod::vq_aligned_residual;
+}
+/// Per-vertex bit blocks: a quantised residual on top of VQ, or the predictive coder.
+inline bool has_bit_blocks(PageMethod m) {
+  return m == PageMethod::vq_residual || m == PageMethod::vq_aligned_residual || m == PageMethod::predictive;
+}
+constexpr std::uint32_t kMaxMethod = 4;
+
+}  // namespace penumbra::compression::detail
