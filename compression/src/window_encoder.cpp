@@ -270,6 +270,33 @@ Coded encode_residual(const float* x, std::uint32_t steps, const float* base, fl
   return {layout.code, layout.bits};
 }
 
+/// The per-vertex records of a VQ page: encode_group(first, last, x) chooses the codewords of
+/// vertices [first, last) (x: scratch for their windows, left holding them). With a residual,
+/// each vertex's window is then coded against base(v, out), its decoded series, in bit blocks.
+template <class EncodeGroup, class Base>
+void encode_vertices(EncodedPage& page, std::uint64_t N, std::uint32_t W, std::uint32_t n, bool residual, float step,
+                     float bound, const EncodeGroup& encode_group, const Base& base) {
+  if (!residual) {
+    parallel_for(N, kGroup, [&](std::size_t b, std::size_t e) {
+      thread_local std::vector<float> x;
+      for (std::size_t g = b; g < e; g += kGroup) encode_group(g, std::min<std::uint64_t>(e, g + kGroup), x);
+    });
+    return;
+  }
+  page.step = step;
+  page.blocks = detail::build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
+    thread_local std::vector<float> x, vbase;
+    thread_local std::vector<std::uint32_t> scratch;
+    encode_group(first, last, x);
+    vbase.resize(W);
+    scratch.resize(W);
+    run([&](std::uint64_t v, BitWriter& writer) {
+      base(v, vbase.data());
+      return encode_residual(x.data() + (v - first) * W, n, vbase.data(), step, bound, &writer, scratch.data()).code;
+    });
+  });
+}
+
 // Error-bounded predictive coding of one vertex: k_t = round((x - lo) / step), stored as k_0
 // and the zigzag prediction errors of whichever predictor packs smaller (predictive_layout.h).
 Coded encode_predictive(const float* x, std::uint32_t steps, float lo, float step, float bound,
@@ -599,27 +626,10 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
       const detail::PartialVectors set{u.data(), offsets.data(), last - first, aligned.dim, n};
       search.nearest(set, 0, last - first, page.ia.data() + first);
     };
-    if (!residual) {
-      parallel_for(N, kGroup, [&](std::size_t b, std::size_t e) {
-        thread_local std::vector<float> x;
-        for (std::size_t g = b; g < e; g += kGroup) encode_group(g, std::min<std::uint64_t>(e, g + kGroup), x);
-      });
-    } else {
-      page.step = step;
-      page.blocks = detail::build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
-        thread_local std::vector<float> x, vbase;
-        thread_local std::vector<std::uint32_t> scratch;
-        encode_group(first, last, x);
-        vbase.resize(W);
-        scratch.resize(W);
-        run([&](std::uint64_t v, BitWriter& writer) {
-          detail::aligned_series(aligned.level_deq[v], page.ca.data() + std::size_t(page.ia[v]) * aligned.dim, W,
-                                 page.shift[v], n, vbase.data());
-          return encode_residual(x.data() + (v - first) * W, n, vbase.data(), step, bound, &writer, scratch.data())
-              .code;
-        });
-      });
-    }
+    encode_vertices(page, N, W, n, residual, step, bound, encode_group, [&](std::uint64_t v, float* out) {
+      detail::aligned_series(aligned.level_deq[v], page.ca.data() + std::size_t(page.ia[v]) * aligned.dim, W,
+                             page.shift[v], n, out);
+    });
   } else {
     page.i8.resize(N);
     page.iw.resize(N);
@@ -634,27 +644,10 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
       stage.encode(x.data(), mean_f.data() + first, last - first, page.i8.data() + first, page.iw.data() + first,
                    scratch8, scratchw);
     };
-    if (!residual) {
-      parallel_for(N, kGroup, [&](std::size_t b, std::size_t e) {
-        thread_local std::vector<float> x;
-        for (std::size_t g = b; g < e; g += kGroup) encode_group(g, std::min<std::uint64_t>(e, g + kGroup), x);
-      });
-    } else {
-      page.step = step;
-      page.blocks = detail::build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
-        thread_local std::vector<float> x, vbase;
-        thread_local std::vector<std::uint32_t> scratch;
-        encode_group(first, last, x);
-        vbase.resize(W);
-        scratch.resize(W);
-        run([&](std::uint64_t v, BitWriter& writer) {
-          detail::vq_series(mean_f[v], page.c8.data() + std::size_t(page.i8[v]) * 8,
-                            page.cw.data() + std::size_t(page.iw[v]) * W, W, vbase.data());
-          return encode_residual(x.data() + (v - first) * W, n, vbase.data(), step, bound, &writer, scratch.data())
-              .code;
-        });
-      });
-    }
+    encode_vertices(page, N, W, n, residual, step, bound, encode_group, [&](std::uint64_t v, float* out) {
+      detail::vq_series(mean_f[v], page.c8.data() + std::size_t(page.i8[v]) * 8,
+                        page.cw.data() + std::size_t(page.iw[v]) * W, W, out);
+    });
   }
 
   if (stats) {
