@@ -101,7 +101,7 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 }
 
 Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double seg_length,
-                    std::int32_t* start) {
+                    std::int32_t* start, std::vector<WalkSegment>* record) {
   const TetMesh& mesh = ctx.mesh;
   const auto& topo = ctx.topology;
   // Start: the incident tet into which d points most deeply. With e_j the tet's edges from v, d
@@ -168,9 +168,11 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
     t_out = std::max(t_out, t_in);
     if (t_out >= seg_length || exit < 0) {
       depth += segment_depth(ctx, tet, x, d, t_in, seg_length, piece_hint);
+      if (record) record->push_back({tet, static_cast<float>(t_in), static_cast<float>(seg_length)});
       return {Trace::Kind::inside, tet, x + d * seg_length, depth};
     }
     depth += segment_depth(ctx, tet, x, d, t_in, t_out, piece_hint);
+    if (record) record->push_back({tet, static_cast<float>(t_in), static_cast<float>(t_out)});
     const std::int32_t next = mesh.neighbors[static_cast<std::size_t>(tet)][exit];
     if (next < 0) return {Trace::Kind::left_mesh, tet, x + d * t_out, depth};
     excluded = 0;
@@ -250,6 +252,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   const Vec3d back = point ? Vec3d{} : -normalize(light.vector);
   const std::size_t np = rho1.size();
   if (state.start_tet.size() != np) state.start_tet.assign(np, -1);
+  if (state.walks.size() != np) state.walks.assign(np, RecordedWalk{});
   if (!state.in_pass) {
     state.full = state.departure_tet.size() != np;
     if (state.full) {
@@ -265,8 +268,13 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   }
   const bool full = state.full;
 
-  auto departure_value = [&](const Trace& tr) {
-    const auto w = convex_weights(barycentric(mesh, tr.tet, tr.end));
+  auto departure_value = [&](const Trace& tr, RecordedWalk& walk) {
+    if (!walk.has_weights) {
+      const auto bw = convex_weights(barycentric(mesh, tr.tet, tr.end));
+      for (int k = 0; k < 4; ++k) walk.weights[k] = static_cast<float>(bw[k]);
+      walk.has_weights = true;
+    }
+    const std::array<double, 4> w{walk.weights[0], walk.weights[1], walk.weights[2], walk.weights[3]};
     const auto& tv = mesh.tets[static_cast<std::size_t>(tr.tet)];
     double values[4], path[4];
     Vec3d corner[4];
@@ -298,9 +306,28 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         reaches_light = true;
       }
     }
-    Trace tr = trace_segment(ctx, v, x, d, len, &state.start_tet[static_cast<std::size_t>(v)]);
-    double upstream = 0.0;
     const auto vv = static_cast<std::size_t>(v);
+    RecordedWalk& walk = state.walks[vv];
+    Trace tr;
+    if (walk.valid) {
+      // The same walk as last time: only the extinction along it is new.
+      double depth = 0.0;
+      int piece_hint = -1;
+      for (const WalkSegment& seg : walk.segments)
+        depth += segment_depth(ctx, seg.tet, x, d, seg.ta, seg.tb, piece_hint);
+      tr = {static_cast<Trace::Kind>(walk.kind), walk.tet, x + d * static_cast<double>(walk.end), depth};
+      if (tr.kind == Trace::Kind::inside) tr.end = x + d * len;
+    } else {
+      walk.segments.clear();
+      tr = trace_segment(ctx, v, x, d, len, &state.start_tet[vv], &walk.segments);
+      walk.tet = tr.tet;
+      walk.kind = static_cast<std::uint8_t>(tr.kind);
+      walk.end = static_cast<float>(dot(tr.end - x, d));
+      walk.has_weights = false;
+      walk.valid = tr.kind != Trace::Kind::lost;
+      if (!walk.valid) walk.segments = {};
+    }
+    double upstream = 0.0;
     state.departure_tet[vv] = -1;
     state.stale[vv] = 0;
     if (tr.kind == Trace::Kind::inside && !reaches_light) {
@@ -308,10 +335,12 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       // A corner not in an earlier group was read before its update in this pass.
       for (std::int32_t c : mesh.tets[static_cast<std::size_t>(tr.tet)])
         if (order.group_of[static_cast<std::size_t>(c)] >= order.group_of[vv]) state.stale[vv] = 1;
-      upstream = departure_value(tr);
+      upstream = departure_value(tr, walk);
       // A departure tet with every corner on the inflow boundary carries no extinction to
-      // interpolate from: walk on to where the ray leaves the mesh bounds instead.
+      // interpolate from: walk on to where the ray leaves the mesh bounds instead (not recorded:
+      // rare, and it depends on the values).
       if (std::isnan(upstream)) {
+        walk.valid = false;
         tr = trace_segment(ctx, v, x, d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
         state.departure_tet[vv] = -1;
         state.stale[vv] = 0;

@@ -32,6 +32,12 @@ struct Level1Context {
   }
 };
 
+/// One tet of a recorded walk and the walk's parameter range inside it.
+struct WalkSegment {
+  std::int32_t tet;
+  float ta, tb;
+};
+
 /// Result of walking the straight segment from a vertex towards the light.
 struct Trace {
   enum class Kind { inside, left_mesh, lost } kind;
@@ -48,8 +54,9 @@ struct Trace {
 /// face_plane), so both tets of a face agree exactly.
 /// `start`, when given, caches the start tet for this vertex and direction (-1: unknown, -2: d
 /// leaves the mesh at v); it stays valid while the mesh and the light do.
+/// `record`, when given, receives the walked segments (see RecordedWalk).
 Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
-                    std::int32_t* start = nullptr);
+                    std::int32_t* start = nullptr, std::vector<WalkSegment>* record = nullptr);
 
 /// Length of the ray from x towards the light that lies inside `box` (the mesh bounds).
 double box_path_length(const Bounds& box, const Vec3d& x, const Light& light);
@@ -93,8 +100,22 @@ struct VertexOrder {
 /// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
 /// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
 /// it (clear()) whenever the light, field or step changes.
+/// A vertex's walk towards the light, kept while the light and the step stay. The tets crossed,
+/// the crossing parameters and the departure point's weights depend on the geometry only, so a
+/// new field (the next in-situ time step) re-integrates the extinction along the recorded
+/// segments instead of walking again.
+struct RecordedWalk {
+  std::vector<WalkSegment> segments;
+  std::int32_t tet = -1;  ///< Trace::tet
+  float end = 0;          ///< Trace::end = x + d * end
+  float weights[4] = {0, 0, 0, 0};
+  std::uint8_t kind = 0;  ///< Trace::Kind
+  bool valid = false, has_weights = false;
+};
+
 struct PassState {
   std::vector<std::int32_t> start_tet;  ///< per vertex, see trace_segment; kept across clear()
+  std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet
   std::vector<std::int32_t> departure_tet;
   std::vector<std::uint8_t> stale, changed;
   std::vector<float> next;

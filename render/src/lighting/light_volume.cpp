@@ -80,6 +80,7 @@ struct LightVolume::Impl {
     void forget_direction() {
       order_valid = false;
       pass_state.start_tet.clear();
+      pass_state.walks.clear();
     }
   };
 
