@@ -7,7 +7,8 @@
 # PNB_BENCH_OCC_MC_MAX_POINTS (scenes with more mesh points get no Monte Carlo image and null
 # errors, default 60000: the Monte Carlo image costs about 1 ms of rays per point),
 # PNB_BENCH_OCC_ALPHA (global attenuation alpha, default 1), PNB_BENCH_OCC_WEIGHT (section
-# weight: mean, the default, or thesis for eq. 3-15) and PNB_BENCH_OCC_GPU (on, the default: also
+# weight: mean, the default, or thesis for eq. 3-15), PNB_BENCH_OCC_PYRAMID (what the pyramid filters:
+# opacity, the default, extinction or step_opacity; occlusion.h) and PNB_BENCH_OCC_GPU (on, the default: also
 # lines with backend "gpu" when the GPU backend is built -- a hardware device, else Mesa's llvmpipe,
 # which shows agreement but a CPU's speed; off: CPU lines only). PNB_EGL_DEVICE / PNB_EGL_LIBRARY
 # choose the EGL device or library.
@@ -21,6 +22,7 @@ bench_occlusion() {
     "$bin/pnb_bench_occlusion" --scene "$scene" --data-dir "$data" --frames "$frames" \
       --size "${PNB_BENCH_OCC_SIZE:-512x512}" --grid "${PNB_BENCH_OCC_GRID:-128}" \
       --preillum "${PNB_BENCH_OCC_PREILLUM:-64}" --mc-max-points "${PNB_BENCH_OCC_MC_MAX_POINTS:-60000}" \
-      --alpha "${PNB_BENCH_OCC_ALPHA:-1}" --weight "${PNB_BENCH_OCC_WEIGHT:-mean}" --gpu "${PNB_BENCH_OCC_GPU:-on}"
+      --alpha "${PNB_BENCH_OCC_ALPHA:-1}" --weight "${PNB_BENCH_OCC_WEIGHT:-mean}" \
+      --pyramid "${PNB_BENCH_OCC_PYRAMID:-opacity}" --gpu "${PNB_BENCH_OCC_GPU:-on}"
   done
 }

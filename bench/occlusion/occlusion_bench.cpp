@@ -3,6 +3,7 @@
 //
 // Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
+//          [--pyramid opacity|extinction|step_opacity]
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
 // grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets).
@@ -194,6 +195,13 @@ int run(int argc, char** argv) {
   const int hex_n = std::stoi(pb::option(argc, argv, "hex-n", "24"));
   const double alpha = std::stod(pb::option(argc, argv, "alpha", "1"));
   const std::string weight_name = pb::option(argc, argv, "weight", "mean");
+  const std::string pyramid_name = pb::option(argc, argv, "pyramid", "opacity");
+  penumbra::require(pyramid_name == "opacity" || pyramid_name == "extinction" || pyramid_name == "step_opacity",
+                    "pnb_bench_occlusion: --pyramid " + pyramid_name + "; expected opacity, extinction or step_opacity");
+  pr::PyramidOptions pyramid_options;
+  pyramid_options.quantity = pyramid_name == "opacity"      ? pr::PyramidQuantity::opacity
+                             : pyramid_name == "extinction" ? pr::PyramidQuantity::extinction
+                                                            : pr::PyramidQuantity::step_opacity;
   const std::string gpu_option = pb::option(argc, argv, "gpu", "on");
   penumbra::require(gpu_option == "on" || gpu_option == "off", "pnb_bench_occlusion: --gpu " + gpu_option + "; expected on or off");
   penumbra::require(weight_name == "mean" || weight_name == "thesis",
@@ -225,7 +233,7 @@ int run(int argc, char** argv) {
   pb::Stopwatch resample_clock;
   const pr::ExtinctionGrid grid = pr::resample_extinction(mesh, s.scalars, s.tf, grid_res);
   const double resample_ms = resample_clock.ms();
-  const pr::ExtinctionPyramid pyramid(grid);
+  const pr::ExtinctionPyramid pyramid(grid, pyramid_options);
 
   pr::RenderOptions lit;
   lit.shading.model = pr::LightingModel::light_volume;
@@ -288,6 +296,7 @@ int run(int argc, char** argv) {
     line["shadow_aperture_deg"] = mode == "ao+shadow" || mode == "shadow-cone" ? kShadowAperture : 0.0;
     line["alpha"] = alpha;
     line["section_weight"] = weight_name;
+    line["pyramid_quantity"] = pyramid_name;
     line["width"] = width;
     line["height"] = height;
     line["ms_per_frame"] = pb::rounded(pb::median(times));
@@ -418,8 +427,8 @@ int run(int argc, char** argv) {
   const pr::GpuExtinctionPyramid gpu_pyramid(device, pyramid);
   // The same pyramid filtered on the device (second build timed: the first JIT-compiles the shader
   // on some drivers). The cones below still read the CPU-built levels (see gpu_occlusion.h).
-  pr::gpu_build_pyramid_levels(device, grid);
-  const pr::GpuPyramidLevels gpu_levels = pr::gpu_build_pyramid_levels(device, grid);
+  pr::gpu_build_pyramid_levels(device, grid, pyramid_options);
+  const pr::GpuPyramidLevels gpu_levels = pr::gpu_build_pyramid_levels(device, grid, pyramid_options);
   pr::GpuRayCaster gpu_caster(device, s.mesh);
   auto gpu_frame = [&](const std::vector<float>& field) {
     const std::vector<float> rgb = pr::grey_light_rgb(field);

@@ -1,8 +1,8 @@
 // render/src/occlusion/cone_tracer.cpp -- Gaussian cone tracing (thesis sec. 3.2.2-3.2.4, app. A)
 //
-// The sample schedule (distance, level, cone count, trapezoid weight, section weight) depends only
+// The sample schedule (distance, level and blend, cone count, trapezoid weight, section weight) depends only
 // on the options and sigma0, so it is built once, like the thesis's 1D texture; tracing a cone
-// then costs one trilinear fetch per sample and sub-cone.
+// then costs one trilinear fetch per sample and sub-cone, two where it blends two levels.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -76,52 +76,28 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
     m_dir7[static_cast<std::size_t>(j + 1)] = normalize(Vec3d{tan_theta * kOffset7 * std::cos(phi), tan_theta * kOffset7 * std::sin(phi), 1.0});
   }
 
-  // Schedule: at each distance, split first (keeps level 0 as long as possible), then climb levels,
-  // until the section radius is within r_c = 2 sigma. Steps are 1.25 sigma_i + 1.25 sigma_{i+1}.
+  // Schedule: at each distance, split first while the section outgrows r_c = 2 sigma0 (keeps
+  // level 0 as long as possible), then read the continuous level lambda = log2(r / (2 sigma0)),
+  // sigma_lambda = sigma0 2^lambda = r / 2 -- the per-axis standard deviation of a uniform disc of
+  // radius r, so the filter has the section's second moment (occlusion.h, "Level selection") --
+  // blending the two levels around it. Steps are 2.5 sigma_lambda.
   if (!(m_length > m_gap)) return;
   const int top = pyramid.levels() - 1;
-  int level = 0, cones = 1;
-  // Fits (cones, level) for a sample at distance d; returns false if the level had to change.
-  auto fit = [&](double d, int& c, int& l) {
-    const int l_in = l;
-    while (d * sub_tan(c, tan_theta) > 2.0 * pyramid.level(l).sigma) {
-      if (c < o.splits) {
-        c = c == 1 ? 3 : 7;
-      } else if (l < top) {
-        ++l;
-      } else {
-        break;
-      }
-    }
-    return l == l_in;
-  };
-  double d = m_gap;
-  fit(d, cones, level);
-  double prev_d = d;
+  int cones = 1;
+  double d = m_gap, prev_d = m_gap;
   for (bool first = true;; first = false) {
+    while (cones < o.splits && d * sub_tan(cones, tan_theta) > 2.0 * sigma0) cones = cones == 1 ? 3 : 7;
     const double r = d * sub_tan(cones, tan_theta);
-    const double sigma = pyramid.level(level).sigma;
-    m_schedule.push_back({d, first ? 0.0 : 0.5 * (d - prev_d), section_weight(o.weight, r, sigma, o.attenuation), level, cones});
+    const double lambda = std::min(static_cast<double>(top), r > 2.0 * sigma0 ? std::log2(r / (2.0 * sigma0)) : 0.0);
+    int level = static_cast<int>(std::floor(lambda));
+    double blend = lambda - level;
+    if (level >= top) level = top, blend = 0.0;
+    const double sigma = sigma0 * std::exp2(lambda);
+    m_schedule.push_back({d, first ? 0.0 : 0.5 * (d - prev_d), section_weight(o.weight, r, sigma, o.attenuation), level, cones, blend});
     if (d >= m_length) break;
     prev_d = d;
-    // Next distance: 2.5 sigma at the same level; if that sample needs a higher level, the step
-    // is 1.25 sigma + 1.25 sigma_next (re-fitted at the new distance).
-    int next_cones = cones, next_level = level;
-    double next_d = d + 2.5 * sigma;
-    for (int guard = 0; guard < 64 && next_d < m_length && !fit(next_d, next_cones, next_level); ++guard) {
-      const int l = next_level;
-      next_d = d + 1.25 * sigma + 1.25 * pyramid.level(l).sigma;
-    }
-    if (next_d >= m_length) {
-      // Last sample exactly at L (trapezoid over [h0, L]), fitted to its own section.
-      next_d = m_length;
-      next_cones = cones;
-      next_level = level;
-      fit(next_d, next_cones, next_level);
-    }
-    d = next_d;
-    cones = next_cones;
-    level = next_level;
+    // The last sample sits exactly at L (trapezoid over [h0, L]).
+    d = std::min(m_length, d + kConeStepSigmas * sigma);
   }
 }
 
@@ -170,9 +146,13 @@ double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis, double ma
         dirs[i] = world(cones == 3 ? m_dir3[static_cast<std::size_t>(i)] : m_dir7[static_cast<std::size_t>(i)]);
     }
     const PyramidLevel& lev = m_pyramid->level(cs.level);
+    const PyramidLevel& next = m_pyramid->level(cs.blend > 0 ? cs.level + 1 : cs.level);
     bool all_opaque = true;
     for (int i = 0; i < cones; ++i) {
-      const double a = cs.kappa * lev.sample(apex + dirs[i] * cs.distance);
+      const Vec3d x = apex + dirs[i] * cs.distance;
+      double tau = lev.sample(x);
+      if (cs.blend > 0) tau += cs.blend * (next.sample(x) - tau);
+      const double a = cs.kappa * tau;
       depth[i] += cs.weight * (amp[i] + a);
       amp[i] = a;
       all_opaque = all_opaque && depth[i] > kOpaqueDepth;

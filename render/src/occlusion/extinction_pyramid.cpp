@@ -131,57 +131,62 @@ ExtinctionPyramid::ExtinctionPyramid(const ExtinctionGrid& grid, const PyramidOp
     pad[a] = static_cast<int>(std::ceil(3.0 * sigma_nodes0[a]));
   }
 
-  // What is filtered: extinction, or per-cell opacity (converted back to extinction per level).
-  const bool opacity = options.quantity == PyramidQuantity::opacity;
-  const double cell = grid.mean_spacing();
-  std::vector<float> filtered;  // the last level in the filtered quantity
+  // Level l's lattice: nodes lo + (n - pad) spacing_l, spacing_l = 2^l spacing; interior node
+  // counts halve per level, N_{l+1} = ceil(N_l / 2), until at most 2 per axis.
+  int interior[3] = {grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1};
+  auto make_level = [&](int l, const std::array<int, 3>& dims, std::vector<float> tau) {
+    PyramidLevel level;
+    level.dims = dims;
+    level.spacing = grid.spacing * std::ldexp(1.0, l);
+    for (int a = 0; a < 3; ++a) level.lo[a] = grid.lo[a] - pad[a] * level.spacing[a];
+    level.sigma = sigma0 * std::ldexp(1.0, l);
+    level.tau = std::move(tau);
+    m_levels.push_back(std::move(level));
+  };
+  auto more_levels = [&] {
+    if (static_cast<int>(m_levels.size()) >= options.max_levels) return false;
+    if (m_levels.empty()) return true;
+    if (std::max(interior[0], std::max(interior[1], interior[2])) <= 2) return false;
+    for (int a = 0; a < 3; ++a) interior[a] = (interior[a] + 1) / 2;
+    return true;
+  };
 
-  // Level 0: the grid convolved with sigma0, on the padded lattice (same spacing).
-  {
+  if (options.quantity == PyramidQuantity::step_opacity) {
+    // Every level from the grid itself: the opacity of a slab as thick as the level's cone step,
+    // filtered with sigma_l at stride 2^l, converted back with the same thickness (the levels
+    // cannot be chained: the thickness changes per level).
+    for (int l = 0; more_levels(); ++l) {
+      const int stride = 1 << l;
+      const double thickness = kConeStepSigmas * sigma0 * stride;
+      std::vector<float> data = to_opacity(grid.tau, thickness);
+      std::array<int, 3> dims = grid.dims;
+      for (int a = 0; a < 3; ++a) {
+        std::array<int, 3> out_dims{};
+        data = filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], stride, -pad[a] * stride, stride * sigma_nodes0[a],
+                           out_dims);
+        dims = out_dims;
+      }
+      make_level(l, dims, to_extinction(data, thickness));
+    }
+  } else {
+    // Extinction, or per-cell opacity (converted back to extinction per level): level 0 is the
+    // grid convolved with sigma0 on the padded lattice; level l+1 is level l (in the filtered
+    // quantity) convolved with sqrt(3) sigma_l (variances add: 4 = 1 + 3), kept at every second
+    // node (output node o reads input index 2 o - pad).
+    const bool opacity = options.quantity == PyramidQuantity::opacity;
+    const double cell = grid.mean_spacing();
     std::vector<float> data = opacity ? to_opacity(grid.tau, cell) : grid.tau;
     std::array<int, 3> dims = grid.dims;
-    for (int a = 0; a < 3; ++a) {
-      std::array<int, 3> out_dims{};
-      data = filter_axis(data, dims, a, grid.dims[a] + 2 * pad[a], 1, -pad[a], sigma_nodes0[a], out_dims);
-      dims = out_dims;
+    for (int l = 0; more_levels(); ++l) {
+      for (int a = 0; a < 3; ++a) {
+        std::array<int, 3> out_dims{};
+        data = l == 0 ? filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], 1, -pad[a], sigma_nodes0[a], out_dims)
+                      : filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a],
+                                    out_dims);
+        dims = out_dims;
+      }
+      make_level(l, dims, opacity ? to_extinction(data, cell) : data);
     }
-    PyramidLevel level;
-    level.dims = dims;
-    level.spacing = grid.spacing;
-    for (int a = 0; a < 3; ++a) level.lo[a] = grid.lo[a] - pad[a] * grid.spacing[a];
-    level.sigma = sigma0;
-    level.tau = opacity ? to_extinction(data, cell) : data;
-    filtered = std::move(data);
-    m_levels.push_back(std::move(level));
-  }
-
-  // Level l+1 = level l convolved with sqrt(3) sigma_l (variances add: 4 = 1 + 3), kept at every
-  // second node. Interior node counts halve: N_{l+1} = ceil(N_l / 2).
-  int interior[3] = {grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1};
-  while (static_cast<int>(m_levels.size()) < options.max_levels &&
-         std::max(interior[0], std::max(interior[1], interior[2])) > 2) {
-    const PyramidLevel& prev = m_levels.back();
-    std::vector<float> data = std::move(filtered);
-    std::array<int, 3> dims = prev.dims;
-    int next_interior[3];
-    for (int a = 0; a < 3; ++a) {
-      next_interior[a] = (interior[a] + 1) / 2;
-      // Output node o sits at n = o - pad of the new level, i.e. at input n = 2 (o - pad), which
-      // is input index 2 o - pad.
-      std::array<int, 3> out_dims{};
-      data = filter_axis(data, dims, a, next_interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a],
-                         out_dims);
-      dims = out_dims;
-    }
-    PyramidLevel level;
-    level.dims = dims;
-    level.spacing = prev.spacing * 2.0;
-    for (int a = 0; a < 3; ++a) level.lo[a] = grid.lo[a] - pad[a] * level.spacing[a];
-    level.sigma = prev.sigma * 2.0;
-    level.tau = opacity ? to_extinction(data, cell) : data;
-    filtered = std::move(data);
-    m_levels.push_back(std::move(level));
-    for (int a = 0; a < 3; ++a) interior[a] = next_interior[a];
   }
   m_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }

@@ -18,20 +18,29 @@ TEST(ConeTracer, ScheduleFollowsTheThesis) {
   EXPECT_DOUBLE_EQ(s.front().distance, 3.0 * s0);  // h0 = 3 sigma0
   EXPECT_DOUBLE_EQ(t.length(), 0.5 * std::sqrt(12.0));
   EXPECT_DOUBLE_EQ(s.back().distance, t.length());
-  bool saw3 = false, saw7 = false;
+  bool saw3 = false, saw7 = false, saw_blend = false;
   for (std::size_t i = 1; i + 1 < s.size(); ++i) {
-    const double sigma_prev = p.level(s[i - 1].level).sigma, sigma = p.level(s[i].level).sigma;
-    // Steps of 1.25 sigma_i + 1.25 sigma_{i+1} (appendix A).
-    EXPECT_NEAR(s[i].distance - s[i - 1].distance, 1.25 * sigma_prev + 1.25 * sigma, 1e-12);
+    // Continuous level lambda = level + blend; its sigma is sigma0 2^lambda.
+    const double lambda_prev = s[i - 1].level + s[i - 1].blend, lambda = s[i].level + s[i].blend;
+    EXPECT_GE(s[i].blend, 0.0);
+    EXPECT_LT(s[i].blend, 1.0);
+    EXPECT_GE(lambda, lambda_prev - 1e-12);
+    // Steps of 2.5 sigma_lambda of the previous sample (appendix A, with a continuous level).
+    EXPECT_NEAR(s[i].distance - s[i - 1].distance, 2.5 * s0 * std::exp2(lambda_prev), 1e-12);
     EXPECT_GE(s[i].cones, s[i - 1].cones);
     // Levels only climb once all splits are used.
-    if (s[i].level > 0) EXPECT_EQ(s[i].cones, 7);
+    if (lambda > 0) EXPECT_EQ(s[i].cones, 7);
     saw3 = saw3 || s[i].cones == 3;
     saw7 = saw7 || s[i].cones == 7;
-    // Section radius within r_c = 2 sigma unless the top level is reached.
+    saw_blend = saw_blend || s[i].blend > 0.1;
+    // The filter's sigma is r / 2 (a uniform disc's per-axis standard deviation) once the section
+    // outgrows r_c = 2 sigma0, below the top level.
     const double tan_sub = std::tan(20.0 * kPi / 180) * (s[i].cones == 1 ? 1.0 : (s[i].cones == 3 ? 0.4641016 : 1.0 / 3));
-    if (s[i].level < p.levels() - 1) EXPECT_LE(s[i].distance * tan_sub, 2.0 * sigma * (1 + 1e-9));
+    const double r = s[i].distance * tan_sub;
+    if (lambda > 0 && s[i].level < p.levels() - 1) EXPECT_NEAR(s0 * std::exp2(lambda), 0.5 * r, 1e-9 * r);
+    if (lambda == 0) EXPECT_LE(r, 2.0 * s0 * (1 + 1e-9));
   }
+  EXPECT_TRUE(saw_blend);
   EXPECT_TRUE(saw3);
   EXPECT_TRUE(saw7);
 }
@@ -42,7 +51,7 @@ TEST(ConeTracer, ScheduleFollowsTheThesis) {
 TEST(ConeTracer, HomogeneousMediumIsExactForEveryApertureAndSplit) {
   // The grid reaches 4.5 sigma of the coarsest level used beyond every cone section.
   const double tau = 1.0;
-  for (PyramidQuantity q : {PyramidQuantity::extinction, PyramidQuantity::opacity}) {
+  for (PyramidQuantity q : {PyramidQuantity::extinction, PyramidQuantity::opacity, PyramidQuantity::step_opacity}) {
     const ExtinctionPyramid p(grid(121, -6, 6, [&](const Vec3d&) { return tau; }), {q});
     for (double aperture : {0.5, 2.0, 10.0, 20.0, 30.0})
       for (int splits : {1, 3, 7}) {

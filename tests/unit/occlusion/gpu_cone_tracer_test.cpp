@@ -271,16 +271,17 @@ namespace {
 // The pyramid filtered on the device against ExtinctionPyramid: identical lattices, and values
 // that agree to float32 summation. Compared as what the cones integrate: for extinction, tau
 // relative to the largest tau (15-tap float32 sums: ~1e-7, bound 1e-5); for opacity, the per-cell
-// opacity 1 - exp(-tau l) (the filtered quantity, float32 on both paths, bound 1e-5).
+// opacity 1 - exp(-tau l) (the filtered quantity, float32 on both paths, bound 1e-5); for
+// step_opacity the same with l the level's slab thickness kConeStepSigmas sigma_l.
 TEST_F(GpuConeTracerTest, PyramidBuiltOnTheDeviceMatchesTheCpu) {
   const auto mesh = tet_block(10, {0, 0, 0}, {2, 1, 1.5});
   const auto scalars = field(*mesh, [](const Vec3d& x) { return length(x - Vec3d{1.2, 0.5, 0.6}); });
   const ExtinctionGrid g = resample_extinction(*mesh, scalars, ball_tf(40.0, 0.5, 0.1), 41);
-  for (PyramidQuantity q : {PyramidQuantity::extinction, PyramidQuantity::opacity}) {
+  for (PyramidQuantity q : {PyramidQuantity::extinction, PyramidQuantity::opacity, PyramidQuantity::step_opacity}) {
     const ExtinctionPyramid cpu(g, {q});
     const GpuPyramidLevels gpu = gpu_build_pyramid_levels(device, g, {q});
     ASSERT_EQ(static_cast<int>(gpu.levels.size()), cpu.levels());
-    const double l = g.mean_spacing();
+    const double cell = g.mean_spacing();
     double worst = 0, largest = 0;
     for (int k = 0; k < cpu.levels(); ++k) {
       const PyramidLevel &c = cpu.level(k), &d = gpu.levels[static_cast<std::size_t>(k)];
@@ -291,6 +292,7 @@ TEST_F(GpuConeTracerTest, PyramidBuiltOnTheDeviceMatchesTheCpu) {
       }
       EXPECT_EQ(d.sigma, c.sigma);
       ASSERT_EQ(d.tau.size(), c.tau.size());
+      const double l = q == PyramidQuantity::step_opacity ? kConeStepSigmas * c.sigma : cell;
       for (std::size_t i = 0; i < c.tau.size(); ++i) {
         largest = std::max(largest, static_cast<double>(c.tau[i]));
         const double diff = q == PyramidQuantity::extinction
@@ -301,8 +303,8 @@ TEST_F(GpuConeTracerTest, PyramidBuiltOnTheDeviceMatchesTheCpu) {
     }
     if (q == PyramidQuantity::extinction) worst /= largest;
     std::printf("[gpu-pyramid] %s: %d levels, max difference %.2e (%s); build %.1f ms (filter %.1f ms) vs CPU %.1f ms\n",
-                q == PyramidQuantity::extinction ? "extinction" : "opacity", cpu.levels(), worst,
-                q == PyramidQuantity::extinction ? "relative tau" : "cell opacity", gpu.build_ms, gpu.filter_ms,
+                q == PyramidQuantity::extinction ? "extinction" : (q == PyramidQuantity::opacity ? "opacity" : "step_opacity"),
+                cpu.levels(), worst, q == PyramidQuantity::extinction ? "relative tau" : "slab opacity", gpu.build_ms, gpu.filter_ms,
                 cpu.build_ms());
     EXPECT_LT(worst, 1e-5);
     EXPECT_GT(largest, 10.0);  // the ball is there

@@ -87,10 +87,29 @@ TEST(ExtinctionPyramid, OpacityModeIsExactInUniformMediaAndBoundsOpaqueCells) {
   // by -ln(1e-6) / cell.
   ExtinctionGrid o = grid(33, 0, 1, [](const Vec3d&) { return 0.0; });
   o.tau[o.index(16, 16, 16)] = 1e6f;
-  const ExtinctionPyramid pe(o, {PyramidQuantity::extinction}), po(o);
+  const ExtinctionPyramid pe(o, {PyramidQuantity::extinction}), po(o, {PyramidQuantity::opacity});
   const Vec3d beside{0.5 + 2.0 / 32, 0.5, 0.5};
   EXPECT_GT(pe.level(0).sample(beside), 1e3);  // 1e6 * 0.054 * 0.399^2
   EXPECT_LT(po.level(0).sample(beside), 20.0);
+}
+
+TEST(ExtinctionPyramid, StepOpacityKeepsTheSectionMeanTransmittanceOfAStep) {
+  // Sheets across x alternate tau1 and tau2 node by node: any section holds both halves, so a step
+  // of D_l = kConeStepSigmas sigma_l lets through 0.5 (exp(-tau1 D) + exp(-tau2 D)) -- the mean
+  // of the rays -- and the level's tau must give exactly that over D (the alternation survives a
+  // Gaussian of sigma >= 2 spacings as exp(-2 pi^2) ~ 3e-9, hence levels >= 1; float32 rounding
+  // bounds the tolerance). Extinction filtering gives the mean tau instead: darker.
+  const double tau1 = 0.5, tau2 = 60.0;
+  const ExtinctionGrid g = grid(65, 0, 1, [&](const Vec3d& x) { return std::lround(x.x * 64) % 2 ? tau2 : tau1; });
+  const ExtinctionPyramid p(g, {PyramidQuantity::step_opacity});
+  const ExtinctionPyramid pe(g, {PyramidQuantity::extinction});
+  for (int l = 1; l < 4; ++l) {
+    const double d = kConeStepSigmas * p.level(l).sigma;
+    const double want = -std::log(0.5 * (std::exp(-tau1 * d) + std::exp(-tau2 * d))) / d;
+    EXPECT_NEAR(p.level(l).sample({0.5, 0.5, 0.5}), want, 1e-4 * want) << "level " << l;
+    EXPECT_NEAR(pe.level(l).sample({0.5, 0.5, 0.5}), 0.5 * (tau1 + tau2), 1e-4 * tau2) << "level " << l;
+    EXPECT_LT(want, 0.5 * 0.5 * (tau1 + tau2)) << "level " << l;  // the test can tell the two apart
+  }
 }
 
 TEST(ExtinctionPyramid, RejectsBadInput) {

@@ -298,7 +298,7 @@ GpuConeTracer::GpuConeTracer(const GpuExtinctionPyramid& pyramid, const ConeOpti
   };
   std::vector<Entry> entries(s.size());
   for (std::size_t i = 0; i < s.size(); ++i)
-    entries[i] = {{static_cast<float>(s[i].distance), static_cast<float>(s[i].weight), static_cast<float>(s[i].kappa), 0.0f},
+    entries[i] = {{static_cast<float>(s[i].distance), static_cast<float>(s[i].weight), static_cast<float>(s[i].kappa), static_cast<float>(s[i].blend)},
                   {s[i].level, s[i].cones, 0, 0}};
   m.schedule_count = static_cast<int>(s.size());
   CurrentContext current(m.dev());

@@ -4,6 +4,8 @@
 // same normalised Gaussian taps, zeros beyond the input, the same opacity conversion. Three scratch
 // buffers rotate through the three separable passes of a level; every level's extinction lands in
 // one buffer laid out as GpuExtinctionPyramid's.
+// PyramidQuantity::step_opacity filters every level from the grid (kept in its own buffer) at
+// stride 2^l, with that level's slab thickness as the conversion length, as the CPU does.
 #include <array>
 #include <cmath>
 #include <string>
@@ -62,7 +64,10 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
   const auto t0 = gpu::Clock::now();
   const double sigma0 = options.sigma0 > 0 ? options.sigma0 : grid.mean_spacing();
   const bool opacity = options.quantity == PyramidQuantity::opacity;
+  // step_opacity: every level from the grid, as opacity of a slab kConeStepSigmas sigma_l thick.
+  const bool step = options.quantity == PyramidQuantity::step_opacity;
   const double cell = grid.mean_spacing();
+  auto thickness = [&](int l) { return kConeStepSigmas * sigma0 * std::ldexp(1.0, l); };
   int pad[3];
   double sigma_nodes0[3];
   for (int a = 0; a < 3; ++a) {
@@ -83,10 +88,13 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
       level.spacing = grid.spacing * std::ldexp(1.0, l);
       level.sigma = sigma0 * std::ldexp(1.0, l);
       for (int a = 0; a < 3; ++a) {
-        if (l == 0) {
+        if (l > 0) interior[a] = (interior[a] + 1) / 2;
+        if (step) {
+          const int stride = 1 << l;
+          p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], stride, -pad[a] * stride, stride * sigma_nodes0[a]};
+        } else if (l == 0) {
           p[static_cast<std::size_t>(a)] = {a, grid.dims[static_cast<std::size_t>(a)] + 2 * pad[a], 1, -pad[a], sigma_nodes0[a]};
         } else {
-          interior[a] = (interior[a] + 1) / 2;
           p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a]};
         }
         level.dims[static_cast<std::size_t>(a)] = p[static_cast<std::size_t>(a)].count;
@@ -101,6 +109,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
   {
     std::array<int, 3> dims = grid.dims;
     for (std::size_t l = 0; l < passes.size(); ++l) {
+      if (step) dims = grid.dims;
       for (const Pass& p : passes[l]) {
         dims[static_cast<std::size_t>(p.axis)] = p.count;
         scratch = std::max(scratch, volume(dims));
@@ -115,9 +124,10 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
   CurrentContext current(dev);
   const GlApi& gl = current.gl();
   const GLuint program = gpu::compile_compute_program(gl, gpu::kPyramidFilterShader, "pyramid-filter");
-  DeviceBuffer buffers[3], taps, levels;
+  DeviceBuffer buffers[3], taps, levels, source;
   auto release = [&] {
     for (DeviceBuffer& b : buffers) b.release(gl);
+    source.release(gl);
     taps.release(gl);
     levels.release(gl);
     gl.DeleteProgram(program);
@@ -125,6 +135,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
   try {
     for (DeviceBuffer& b : buffers) b.reserve(gl, dev, scratch * sizeof(float), kWho, "filter scratch");
     levels.reserve(gl, dev, total * sizeof(float), kWho, "pyramid levels");
+    if (step) source.reserve(gl, dev, volume(grid.dims) * sizeof(float), kWho, "extinction grid");
     taps.reserve(gl, dev, 64 * sizeof(float), kWho, "Gaussian taps");
     auto u1i = [&](const char* name, int v) { gl.ProgramUniform1i(program, gl.GetUniformLocation(program, name), v); };
     gl.ProgramUniform1f(program, gl.GetUniformLocation(program, "u_cell"), static_cast<float>(cell));
@@ -141,7 +152,8 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
     // Level 0's input in buffers[0]: the grid, as opacity per cell when that is what is filtered.
     const std::size_t n_grid = volume(grid.dims);
     const auto t_upload = gpu::Clock::now();
-    gl.NamedBufferSubData(buffers[opacity ? 2 : 0].name, 0, static_cast<GLsizeiptr>(n_grid * sizeof(float)), grid.tau.data());
+    gl.NamedBufferSubData(step ? source.name : buffers[opacity ? 2 : 0].name, 0, static_cast<GLsizeiptr>(n_grid * sizeof(float)),
+                          grid.tau.data());
     if (opacity) run(1, buffers[2].name, buffers[0].name, n_grid, 0);
     gl.Finish();
     const double upload_ms = gpu::ms_since(t_upload);
@@ -150,6 +162,12 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
     std::array<int, 3> dims = grid.dims;
     std::size_t offset = 0;
     for (std::size_t l = 0; l < passes.size(); ++l) {
+      if (step) {
+        // This level's slab opacity from the grid.
+        gl.ProgramUniform1f(program, gl.GetUniformLocation(program, "u_cell"), static_cast<float>(thickness(static_cast<int>(l))));
+        run(1, source.name, buffers[0].name, n_grid, 0);
+        dims = grid.dims;
+      }
       // buffers[0] -> [1] -> [2] -> [0]: the level's filtered values end where its input was.
       for (std::size_t k = 0; k < 3; ++k) {
         const Pass& p = passes[l][k];
@@ -170,7 +188,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
         run(0, buffers[k].name, buffers[(k + 1) % 3].name, volume(dims), 0);
       }
       // The level's extinction (converted back from opacity) into the levels buffer.
-      run(opacity ? 2 : 3, buffers[0].name, levels.name, volume(dims), offset);
+      run(opacity || step ? 2 : 3, buffers[0].name, levels.name, volume(dims), offset);
       offset += volume(dims);
     }
     gl.Finish();
