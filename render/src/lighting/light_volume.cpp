@@ -13,7 +13,6 @@
 #include "level1_mesh.h"
 #include "level1_solve.h"
 #include "light_scattering.h"
-#include "scatter_solver.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 
@@ -87,9 +86,7 @@ struct LightVolume::Impl {
   std::shared_ptr<const TetMesh> mesh;
   LightVolumeOptions opt;
   lighting::Level1Topology topology;
-  std::vector<float> scatter_weights;  // the GPU's scattering (Jacobi on the normalised weights)
-  lighting::ScatterSolver scatter_solver;  // the CPU's (conjugate gradients)
-  bool scatter_started = false;
+  std::vector<float> scatter_weights;
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
@@ -228,7 +225,6 @@ struct LightVolume::Impl {
     scatter_converged = !scatter;
     scatter_residual = scatter ? HUGE_VAL : 0.0;
     scatter_iterations = 0;
-    scatter_started = false;
     combine_pending = false;
     gpu_scatter_stale = true;
   }
@@ -243,13 +239,10 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.mesh = std::move(mesh);
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
-  if (im.opt.device) {
-    im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
+  im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
+  if (im.opt.device)
     im.gpu = std::make_unique<lighting::GpuLightSolver>(im.opt.device, *im.mesh, im.topology, im.scatter_weights,
                                                         im.opt.occluders);
-  } else {
-    im.scatter_solver = lighting::ScatterSolver(*im.mesh, im.topology);
-  }
   im.build_grid();
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
 }
@@ -373,20 +366,8 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (!im.scatter_done && lights_settled) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
-    bool gpu_ran = false, cpu_ran = false;
-    // Starting the CPU solve (the initial residual: about one iteration's work) is a piece of
-    // the budget like an iteration.
-    if (!im.gpu && !im.scatter_started && allowed(im.last_sweep_ms)) {
-      const auto tw = Clock::now();
-      im.scatter_solver.start(im.pre, im.opt.sigma_s, im.rgb);
-      if (im.last_sweep_ms < 0) im.last_sweep_ms = ms_since(tw);  // the first look-ahead
-      im.scatter_started = true;
-      im.scatter_residual = im.scatter_solver.residual();
-      im.scatter_converged = im.scatter_residual <= tolerance;
-      im.scatter_done = im.scatter_converged;
-      did_work = true;
-    }
-    while (!im.scatter_done && (im.gpu || im.scatter_started) && allowed(im.last_sweep_ms)) {
+    bool gpu_ran = false;
+    while (!im.scatter_done && allowed(im.last_sweep_ms)) {
       const auto tw = Clock::now();
       int ran = 1;
       if (im.gpu) {
@@ -398,8 +379,8 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         ran = im.gpu->scatter(most, tolerance, im.opt.sigma_s, im.scatter_residual);
         gpu_ran = true;
       } else {
-        im.scatter_residual = im.scatter_solver.iterate();
-        cpu_ran = true;
+        im.scatter_residual =
+            lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
       }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;
@@ -410,7 +391,6 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
-    if (cpu_ran) im.scatter_solver.read(im.rgb);
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
