@@ -1,11 +1,12 @@
 // render/src/occlusion/gl/occlusion_gl_util.h -- what the GPU cone tracer and the GPU pyramid
-// build share: compiling a compute program, storage buffers that grow on demand, chunked dispatch
+// build share: storage buffers that grow on demand, chunked dispatch (programs: gpu/gl_program.h)
 #pragma once
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
 
+#include "gpu/gl_program.h"
 #include "gpu/gpu_device_impl.h"
 #include "penumbra/core/error.h"
 
@@ -14,39 +15,6 @@ namespace penumbra::render::gpu {
 using Clock = std::chrono::steady_clock;
 inline double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-inline std::string mib(std::size_t bytes) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(bytes) / (1024.0 * 1024.0));
-  return buf;
-}
-
-/// Compiles and links one compute shader; throws Error(backend_unavailable) with the driver's log.
-inline GLuint compile_compute_program(const GlApi& gl, const char* source, const std::string& what) {
-  const GLuint shader = gl.CreateShader(GL_COMPUTE_SHADER);
-  gl.ShaderSource(shader, 1, &source, nullptr);
-  gl.CompileShader(shader);
-  GLint ok = 0;
-  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetShaderInfoLog(shader, sizeof log, nullptr, log);
-    gl.DeleteShader(shader);
-    throw Error(ErrorCode::backend_unavailable, "GPU backend: the " + what + " shader does not compile: " + log);
-  }
-  const GLuint program = gl.CreateProgram();
-  gl.AttachShader(program, shader);
-  gl.LinkProgram(program);
-  gl.DeleteShader(shader);
-  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096] = {};
-    gl.GetProgramInfoLog(program, sizeof log, nullptr, log);
-    gl.DeleteProgram(program);
-    throw Error(ErrorCode::backend_unavailable, "GPU backend: the " + what + " shader does not link: " + log);
-  }
-  return program;
 }
 
 /// A storage buffer that grows on demand; checked against the device's limits. `who` names the
