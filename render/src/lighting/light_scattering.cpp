@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "penumbra/core/thread_pool.h"
 
@@ -33,6 +34,12 @@ double scatter_sweep(const Level1Topology& topology, const std::vector<float>& w
                      const std::array<double, 3>& sigma_s, std::vector<float>& current, std::vector<float>& snapshot) {
   const std::size_t np = topology.edge_offsets.size() - 1;
   snapshot = current;
+  // Which points have a finite source, once per sweep: the inner loop then reads one byte per
+  // neighbour (a table that stays in cache) instead of gathering its three source values.
+  std::vector<std::uint8_t> finite(np);
+  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) finite[p] = std::isfinite(pre[3 * p] + pre[3 * p + 1] + pre[3 * p + 2]);
+  });
   const std::size_t chunk = (np + kScatterChunks - 1) / kScatterChunks;
   std::vector<double> residuals(kScatterChunks, 0.0);
   parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
@@ -47,13 +54,13 @@ double scatter_sweep(const Level1Topology& topology, const std::vector<float>& w
           // Gauss-Seidel inside the chunk, the previous iterate across chunks.
           const float* src = (q >= begin && q < end ? current.data() : snapshot.data()) + 3 * q;
           // Points without a finite source value are left out (their own value is derived).
-          if (w == 0.0 || !std::isfinite(pre[3 * q] + pre[3 * q + 1] + pre[3 * q + 2])) continue;
+          if (w == 0.0 || !finite[q]) continue;
           sum[0] += w * static_cast<double>(src[0]);
           sum[1] += w * static_cast<double>(src[1]);
           sum[2] += w * static_cast<double>(src[2]);
           wsum += w;
         }
-        const bool own = std::isfinite(pre[3 * p] + pre[3 * p + 1] + pre[3 * p + 2]);
+        const bool own = finite[p];
         for (int ch = 0; ch < 3; ++ch) {
           const double old = current[3 * p + ch];
           double v;
