@@ -106,6 +106,7 @@ struct LightVolume::Impl {
   double step = 0;
   // The last durations, for the time budget's look-ahead (-1: not timed yet).
   double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
+  double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
   void build_grid() {
@@ -337,9 +338,11 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     ++report.work_units;
     did_work = true;
   }
-  const auto deadline = std::isfinite(budget.max_ms)
-                            ? t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(budget.max_ms))
-                            : Clock::time_point::max();
+  const auto deadline =
+      std::isfinite(budget.max_ms)
+          ? t0 + std::chrono::duration_cast<Clock::duration>(
+                     std::chrono::duration<double, std::milli>(budget.max_ms - im.last_combine_ms))
+          : Clock::time_point::max();
   for (auto& l : im.lights)
     while (l.stage == Stage::level1) {
       if (!l.order_valid && !im.gpu) {  // a piece of its own: it cannot stop at the deadline
@@ -357,7 +360,11 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
       did_work = true;
     }
-  if (im.combine_pending) im.combine();
+  if (im.combine_pending) {
+    const auto tc = Clock::now();
+    im.combine();
+    im.last_combine_ms = ms_since(tc);
+  }
   // Scattering waits for the lights: every level-1 pass changes its source and restarts it, so
   // iterations run before the last pass would be thrown away. Until then light_rgb() holds the
   // unscattered estimate plus the last scattering's correction (see combine()).
