@@ -101,6 +101,39 @@ TEST(LightUpdate, FieldJumpWarmStartNoSlowerThanCold) {
   for (std::size_t p = 0; p < mesh->points.size(); ++p) ASSERT_NEAR(warm.light_rho(0)[p], cold.light_rho(0)[p], 1e-4);
 }
 
+// A new field with the same lights replays each vertex's recorded walk (tets, crossing
+// parameters, departure weights) instead of walking again. The replay must give what a fresh
+// walk gives: on a mesh with a through-hole (walks that leave the mesh and continue in level 0),
+// with a directional and a point light and a strong change of the field, the warm light volume
+// matches a new one on the second field to the propagation tolerance. A replay that kept the
+// first field's optical depths would be off by far more (checked against the first field).
+TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
+  const auto mesh = prepare(fixtures::tet_block_with_hole(8));
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  const auto first = field(*mesh, [](const Vec3d& p) { return 0.2 + 0.3 * p.x; });
+  const auto second = field(*mesh, [](const Vec3d& p) { return 0.9 - 0.4 * p.y + 0.1 * std::sin(7 * p.z); });
+  const std::vector<Light> lights{directional({1, 0.3, 0.2}), point_light({0.45, 0.5, 1.6})};
+  LightVolume warm(mesh, opt), fresh(mesh, opt);
+  warm.set_lights(lights);
+  warm.set_field(first, ramp_tf(2.5));
+  ASSERT_TRUE(warm.update().converged);
+  const std::vector<float> rho_first = warm.light_rho(0);
+  warm.set_field(second, ramp_tf(2.5));
+  ASSERT_TRUE(warm.update().converged);
+  fresh.set_lights(lights);
+  fresh.set_field(second, ramp_tf(2.5));
+  ASSERT_TRUE(fresh.update().converged);
+  double worst = 0, moved = 0;
+  for (std::size_t k = 0; k < lights.size(); ++k)
+    for (std::size_t p = 0; p < mesh->points.size(); ++p)
+      worst = std::max(worst, std::fabs(static_cast<double>(warm.light_rho(k)[p]) - fresh.light_rho(k)[p]));
+  for (std::size_t p = 0; p < mesh->points.size(); ++p)
+    moved = std::max(moved, std::fabs(static_cast<double>(fresh.light_rho(0)[p]) - rho_first[p]));
+  EXPECT_LT(worst, 2e-4);
+  EXPECT_GT(moved, 0.05);  // the two fields light the mesh differently
+}
+
 // Level-0 memory budget: a resolution that does not fit is reduced, one that cannot fit at all
 // is a clear error; bad options and inputs are errors, never aborts.
 TEST(LightUpdate, BudgetAndInputErrors) {
