@@ -252,7 +252,10 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   const Vec3d back = point ? Vec3d{} : -normalize(light.vector);
   const std::size_t np = rho1.size();
   if (state.start_tet.size() != np) state.start_tet.assign(np, -1);
-  if (state.walks.size() != np) state.walks.assign(np, RecordedWalk{});
+  if (!ctx.record_walks)
+    state.walks = {};
+  else if (state.walks.size() != np)
+    state.walks.assign(np, RecordedWalk{});
   if (!state.in_pass) {
     state.full = state.departure_tet.size() != np;
     if (state.full) {
@@ -307,7 +310,9 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       }
     }
     const auto vv = static_cast<std::size_t>(v);
-    RecordedWalk& walk = state.walks[vv];
+    thread_local RecordedWalk unrecorded;  // walks are not kept: this one lives for one vertex
+    RecordedWalk& walk = state.walks.empty() ? unrecorded : state.walks[vv];
+    if (state.walks.empty()) walk.valid = false;
     Trace tr;
     if (walk.valid) {
       // The same walk as last time: only the extinction along it is new.

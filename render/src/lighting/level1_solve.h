@@ -22,6 +22,7 @@ struct Level1Context {
   double sigma_a;
   double step;           ///< h = c dt, world units
   bool adaptive = true;  ///< each vertex steps at least twice its longest edge (see level1_step)
+  bool record_walks = true;  ///< keep each vertex's walk (PassState::walks) for the next field
   /// The step of vertex v: h, or with `adaptive` at least twice v's longest edge, so that its
   /// departure tet lies wholly upstream and one ordered pass carries the light across coarse
   /// cells too (with h far below a cell, each pass would move the light by h only). The steady

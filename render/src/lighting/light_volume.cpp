@@ -20,6 +20,8 @@ namespace penumbra::render {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// A recorded level-1 walk (PassState::walks) per point: the record and about 9 segments of 12 B.
+constexpr double kWalkBytesPerPoint = 170.0;
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -170,7 +172,10 @@ struct LightVolume::Impl {
   bool level1_pass(LightState& l, LightUpdateReport& report, Clock::time_point deadline) {
     const auto t0 = Clock::now();
     ensure_order(l);
-    const lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
+    lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
+    ctx.record_walks = static_cast<double>(mesh->points.size()) * static_cast<double>(lights.size()) *
+                           kWalkBytesPerPoint <=
+                       static_cast<double>(opt.walk_memory_budget_bytes);
     bool finished = true;
     if (gpu) {
       // A whole pass on the device (no deadline inside it).

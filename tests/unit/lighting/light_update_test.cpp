@@ -132,6 +132,19 @@ TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
     moved = std::max(moved, std::fabs(static_cast<double>(fresh.light_rho(0)[p]) - rho_first[p]));
   EXPECT_LT(worst, 2e-4);
   EXPECT_GT(moved, 0.05);  // the two fields light the mesh differently
+  // With no memory for recorded walks, every walk is traced anew: the same light.
+  LightVolumeOptions no_record = opt;
+  no_record.walk_memory_budget_bytes = 0;
+  LightVolume traced(mesh, no_record);
+  traced.set_lights(lights);
+  traced.set_field(first, ramp_tf(2.5));
+  ASSERT_TRUE(traced.update().converged);
+  traced.set_field(second, ramp_tf(2.5));
+  ASSERT_TRUE(traced.update().converged);
+  double apart = 0;
+  for (std::size_t p = 0; p < mesh->points.size(); ++p)
+    apart = std::max(apart, std::fabs(static_cast<double>(traced.light_rho(1)[p]) - warm.light_rho(1)[p]));
+  EXPECT_LT(apart, 2e-4);
 }
 
 // Level-0 memory budget: a resolution that does not fit is reduced, one that cannot fit at all
