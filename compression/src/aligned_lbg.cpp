@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "penumbra/core/error.h"
+#include "lbg_split.h"
 #include "penumbra/core/thread_pool.h"
 
 namespace penumbra::compression::detail {
@@ -39,13 +40,6 @@ __attribute__((target_clones("avx2", "default"))) void dot_range(const float* co
       a3[e] += v3 * c;
     }
   }
-}
-
-std::uint64_t splitmix(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
 }
 
 double assign_all(const PartialVectors& set, const std::vector<float>& codebook, std::uint32_t k,
@@ -204,24 +198,10 @@ std::vector<float> train_lbg_partial(const PartialVectors& set, std::uint32_t k,
         ++members[e * D + j];
       }
     }
-    std::vector<std::uint32_t> order(have);
-    for (std::uint32_t e = 0; e < have; ++e) order[e] = e;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return cell_error[a] > cell_error[b]; });
-    const std::uint32_t splits = std::min(have, k - have);
-    codebook.resize(std::size_t(have + splits) * D);
-    for (std::uint32_t s = 0; s < splits; ++s) {
-      const std::size_t e = order[s], twin = have + s;
-      for (std::uint32_t j = 0; j < D; ++j) {
-        const std::size_t c = e * D + j;
-        const double sigma = members[c] ? std::sqrt(spread[c] / double(members[c])) : 0.0;
-        const double delta = 0.5 * sigma * ((splitmix(rng) & 1) ? 1.0 : -1.0) + 1e-12;
-        const float value = codebook[c];
-        codebook[c] = float(value + delta);
-        codebook[twin * D + j] = float(value - delta);
-      }
-    }
-    have += splits;
+    have = split_worst_cells(codebook, have, k, D, cell_error, [&](std::size_t e, std::uint32_t j) {
+      const std::size_t c = e * D + j;
+      return members[c] ? std::sqrt(spread[c] / double(members[c])) : 0.0;
+    }, rng);
     lloyd(set, have, codebook, std::max(1u, iterations_per_split));
   }
   return codebook;

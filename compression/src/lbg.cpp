@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "lbg_split.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 
@@ -115,13 +116,6 @@ void NearestSearch::nearest_m(const float* vectors, std::size_t count, std::uint
 
 namespace {
 
-std::uint64_t splitmix(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
 // Parallel nearest-entry assignment of all training vectors.
 double assign_all(const float* vectors, std::size_t count, std::uint32_t dim, const std::vector<float>& codebook,
                   std::uint32_t k, std::vector<std::uint8_t>& idx, std::vector<float>& dist) {
@@ -210,7 +204,6 @@ std::vector<float> train_lbg(const float* vectors, std::size_t count, std::uint3
   std::vector<std::uint8_t> idx(count);
   std::vector<float> dist(count);
   while (have < k) {
-    // Split the worst cells first when k is not a power of two.
     assign_all(vectors, count, dim, codebook, have, idx, dist);
     std::vector<double> cell_error(have, 0.0);
     std::vector<std::vector<double>> cell_spread(have, std::vector<double>(dim, 0.0));
@@ -224,26 +217,9 @@ std::vector<float> train_lbg(const float* vectors, std::size_t count, std::uint3
         cell_spread[e][j] += d * d;
       }
     }
-    std::vector<std::uint32_t> order(have);
-    for (std::uint32_t e = 0; e < have; ++e) order[e] = e;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return cell_error[a] > cell_error[b]; });
-    const std::uint32_t splits = std::min(have, k - have);
-    codebook.resize(std::size_t(have + splits) * dim);
-    for (std::uint32_t s = 0; s < splits; ++s) {
-      const std::uint32_t e = order[s];
-      const std::uint32_t twin = have + s;
-      for (std::uint32_t j = 0; j < dim; ++j) {
-        // Perturb along the cell's per-axis spread with random signs, so twins separate
-        // along the directions in which the cell actually varies.
-        const double sigma = cell_count[e] ? std::sqrt(cell_spread[e][j] / double(cell_count[e])) : 0.0;
-        const double delta = 0.5 * sigma * ((splitmix(rng) & 1) ? 1.0 : -1.0) + 1e-12;
-        const float c = codebook[std::size_t(e) * dim + j];
-        codebook[std::size_t(e) * dim + j] = float(c + delta);
-        codebook[std::size_t(twin) * dim + j] = float(c - delta);
-      }
-    }
-    have += splits;
+    have = detail::split_worst_cells(codebook, have, k, dim, cell_error, [&](std::size_t e, std::uint32_t j) {
+      return cell_count[e] ? std::sqrt(cell_spread[e][j] / double(cell_count[e])) : 0.0;
+    }, rng);
     mse = lloyd(vectors, count, dim, have, codebook, std::max(1u, options.iterations_per_split));
   }
   if (k == 1) mse = lloyd(vectors, count, dim, 1, codebook, 1);

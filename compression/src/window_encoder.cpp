@@ -10,6 +10,7 @@
 #include "bit_blocks_builder.h"
 #include "bit_io.h"
 #include "predictive_layout.h"
+#include "splitmix.h"
 #include "value_layout.h"
 #include "penumbra/compression/lbg.h"
 #include "penumbra/compression/window_codec.h"
@@ -27,13 +28,6 @@ constexpr std::uint64_t kGroup = BitBlocks::kGroupSize;
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-std::uint64_t splitmix(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
 }
 
 struct Window {
@@ -434,7 +428,7 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
   std::vector<std::uint64_t> sample(S);
   std::uint64_t rng = params.seed ^ (first_step * 0x2545f4914f6cdd1dull);
   for (std::uint64_t i = 0; i < S; ++i) {
-    const double u = S == N ? 0.0 : double(splitmix(rng) >> 11) * 0x1.0p-53;
+    const double u = S == N ? 0.0 : double(detail::splitmix(rng) >> 11) * 0x1.0p-53;
     sample[i] = std::min<std::uint64_t>(N - 1, std::uint64_t((double(i) + u) * double(N) / double(S)));
   }
   std::vector<float> xs(S * W), ms(S);
