@@ -275,6 +275,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     if (!walk.has_weights) {
       const auto bw = convex_weights(barycentric(mesh, tr.tet, tr.end));
       for (int k = 0; k < 4; ++k) walk.weights[k] = static_cast<float>(bw[k]);
+      walk.path = box_path_length(mesh.bounds, tr.end, light);
       walk.has_weights = true;
     }
     const std::array<double, 4> w{walk.weights[0], walk.weights[1], walk.weights[2], walk.weights[3]};
@@ -288,7 +289,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       path[k] = order.path_length[c];
     }
     const Vec3d u = point ? normalize(tr.end - light.vector) : -back;
-    return interpolate_light(w, values, path, box_path_length(mesh.bounds, tr.end, light), corner, u);
+    return interpolate_light(w, values, path, walk.path, corner, u);
   };
 
   auto update = [&](std::int32_t v) -> float {

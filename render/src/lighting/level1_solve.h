@@ -98,22 +98,23 @@ struct VertexOrder {
   std::vector<double> path_length;
 };
 
-/// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
-/// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
-/// it (clear()) whenever the light, field or step changes.
 /// A vertex's walk towards the light, kept while the light and the step stay. The tets crossed,
-/// the crossing parameters and the departure point's weights depend on the geometry only, so a
-/// new field (the next in-situ time step) re-integrates the extinction along the recorded
-/// segments instead of walking again.
+/// the crossing parameters and the departure point's weights and path length depend on the
+/// geometry only, so a new field (the next in-situ time step) re-integrates the extinction along
+/// the recorded segments instead of walking again.
 struct RecordedWalk {
   std::vector<WalkSegment> segments;
   std::int32_t tet = -1;  ///< Trace::tet
   float end = 0;          ///< Trace::end = x + d * end
   float weights[4] = {0, 0, 0, 0};
+  double path = 0;        ///< box_path_length at the departure point
   std::uint8_t kind = 0;  ///< Trace::Kind
   bool valid = false, has_weights = false;
 };
 
+/// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
+/// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
+/// it (clear()) whenever the light, field or step changes.
 struct PassState {
   std::vector<std::int32_t> start_tet;  ///< per vertex, see trace_segment; kept across clear()
   std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet

@@ -20,8 +20,8 @@ namespace penumbra::render {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-// A recorded level-1 walk (PassState::walks) per point: the record and about 9 segments of 12 B.
-constexpr double kWalkBytesPerPoint = 170.0;
+// A recorded level-1 walk (PassState::walks) per point: the 64-byte record and about 9 segments of 12 B.
+constexpr double kWalkBytesPerPoint = 180.0;
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }

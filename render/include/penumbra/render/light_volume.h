@@ -146,9 +146,9 @@ struct LightVolumeOptions {
   /// Safety caps on iterations per light and for scattering (each counts as one work unit).
   int level1_max_passes = 64;
   int scatter_max_iterations = 2000;
-  /// Level-1 walks are recorded (tets, crossing parameters, departure weights: about 170 bytes
+  /// Level-1 walks are recorded (tets, crossing parameters, departure weights: about 180 bytes
   /// per point and light on a tet mesh) so that a new field with the same lights re-integrates
-  /// along them instead of walking again. They are kept while points x lights x 170 B fits in
+  /// along them instead of walking again. They are kept while points x lights x 180 B fits in
   /// this budget, else every walk is traced anew (0 turns recording off).
   std::size_t walk_memory_budget_bytes = std::size_t{1} << 30;
   LightSolveMode mode = LightSolveMode::two_level;
