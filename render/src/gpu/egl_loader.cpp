@@ -32,22 +32,13 @@ std::unique_ptr<EglApi> open_egl(const std::string& name) {
   }
   auto api = std::make_unique<EglApi>();
   api->library_path = name;
-  api->GetProcAddress = symbol<PFNEGLGETPROCADDRESSPROC>(lib, "eglGetProcAddress");
-  api->GetError = symbol<PFNEGLGETERRORPROC>(lib, "eglGetError");
-  api->QueryString = symbol<PFNEGLQUERYSTRINGPROC>(lib, "eglQueryString");
-  api->Initialize = symbol<PFNEGLINITIALIZEPROC>(lib, "eglInitialize");
-  api->Terminate = symbol<PFNEGLTERMINATEPROC>(lib, "eglTerminate");
-  api->BindAPI = symbol<PFNEGLBINDAPIPROC>(lib, "eglBindAPI");
-  api->ChooseConfig = symbol<PFNEGLCHOOSECONFIGPROC>(lib, "eglChooseConfig");
-  api->CreateContext = symbol<PFNEGLCREATECONTEXTPROC>(lib, "eglCreateContext");
-  api->DestroyContext = symbol<PFNEGLDESTROYCONTEXTPROC>(lib, "eglDestroyContext");
-  api->MakeCurrent = symbol<PFNEGLMAKECURRENTPROC>(lib, "eglMakeCurrent");
-  api->GetCurrentContext = symbol<PFNEGLGETCURRENTCONTEXTPROC>(lib, "eglGetCurrentContext");
-  api->GetCurrentDisplay = symbol<PFNEGLGETCURRENTDISPLAYPROC>(lib, "eglGetCurrentDisplay");
-  api->GetCurrentSurface = symbol<PFNEGLGETCURRENTSURFACEPROC>(lib, "eglGetCurrentSurface");
-  if (!api->GetProcAddress || !api->GetError || !api->QueryString || !api->Initialize || !api->Terminate ||
-      !api->BindAPI || !api->ChooseConfig || !api->CreateContext || !api->DestroyContext || !api->MakeCurrent ||
-      !api->GetCurrentContext || !api->GetCurrentDisplay || !api->GetCurrentSurface)
+  bool complete = true;
+#define PNB_EGL_LOAD(type, name)          \
+  api->name = symbol<type>(lib, "egl" #name); \
+  complete = complete && api->name != nullptr;
+  PNB_EGL_FUNCTIONS(PNB_EGL_LOAD)
+#undef PNB_EGL_LOAD
+  if (!complete)
     throw Error(ErrorCode::backend_unavailable,
                 "GPU backend: '" + name + "' is not an EGL 1.4 library (core entry points missing)");
   const char* ext = api->QueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);

@@ -14,22 +14,28 @@
 
 namespace penumbra::render::gpu {
 
+/// The EGL 1.4 core entry points Penumbra calls: X(type, name) for eglName, resolved with dlsym.
+#define PNB_EGL_FUNCTIONS(X)                                   \
+  X(PFNEGLGETPROCADDRESSPROC, GetProcAddress)                  \
+  X(PFNEGLGETERRORPROC, GetError)                              \
+  X(PFNEGLQUERYSTRINGPROC, QueryString)                        \
+  X(PFNEGLINITIALIZEPROC, Initialize)                          \
+  X(PFNEGLTERMINATEPROC, Terminate)                            \
+  X(PFNEGLBINDAPIPROC, BindAPI)                                \
+  X(PFNEGLCHOOSECONFIGPROC, ChooseConfig)                      \
+  X(PFNEGLCREATECONTEXTPROC, CreateContext)                    \
+  X(PFNEGLDESTROYCONTEXTPROC, DestroyContext)                  \
+  X(PFNEGLMAKECURRENTPROC, MakeCurrent)                        \
+  X(PFNEGLGETCURRENTCONTEXTPROC, GetCurrentContext)            \
+  X(PFNEGLGETCURRENTDISPLAYPROC, GetCurrentDisplay)            \
+  X(PFNEGLGETCURRENTSURFACEPROC, GetCurrentSurface)
+
 struct EglApi {
   std::string library_path;
   std::string client_extensions;  ///< eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS)
-  PFNEGLGETPROCADDRESSPROC GetProcAddress = nullptr;
-  PFNEGLGETERRORPROC GetError = nullptr;
-  PFNEGLQUERYSTRINGPROC QueryString = nullptr;
-  PFNEGLINITIALIZEPROC Initialize = nullptr;
-  PFNEGLTERMINATEPROC Terminate = nullptr;
-  PFNEGLBINDAPIPROC BindAPI = nullptr;
-  PFNEGLCHOOSECONFIGPROC ChooseConfig = nullptr;
-  PFNEGLCREATECONTEXTPROC CreateContext = nullptr;
-  PFNEGLDESTROYCONTEXTPROC DestroyContext = nullptr;
-  PFNEGLMAKECURRENTPROC MakeCurrent = nullptr;
-  PFNEGLGETCURRENTCONTEXTPROC GetCurrentContext = nullptr;
-  PFNEGLGETCURRENTDISPLAYPROC GetCurrentDisplay = nullptr;
-  PFNEGLGETCURRENTSURFACEPROC GetCurrentSurface = nullptr;
+#define PNB_EGL_MEMBER(type, name) type name = nullptr;
+  PNB_EGL_FUNCTIONS(PNB_EGL_MEMBER)
+#undef PNB_EGL_MEMBER
   // Extensions; null when the library lacks them.
   PFNEGLQUERYDEVICESEXTPROC QueryDevicesEXT = nullptr;
   PFNEGLQUERYDEVICESTRINGEXTPROC QueryDeviceStringEXT = nullptr;
