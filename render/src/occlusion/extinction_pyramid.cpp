@@ -14,30 +14,17 @@
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/occlusion.h"
+#include "pyramid_filter_taps.h"
 
 namespace penumbra::render {
 namespace {
-
-// Normalised Gaussian taps w[k + radius] for k in [-radius, radius], sigma in node units.
-std::vector<double> gaussian_taps(double sigma_nodes, int& radius) {
-  radius = std::max(1, static_cast<int>(std::ceil(4.0 * sigma_nodes)));
-  std::vector<double> w(static_cast<std::size_t>(2 * radius + 1));
-  double sum = 0;
-  for (int k = -radius; k <= radius; ++k) {
-    const double x = k / sigma_nodes;
-    w[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * x * x);
-    sum += w[static_cast<std::size_t>(k + radius)];
-  }
-  for (double& v : w) v /= sum;
-  return w;
-}
 
 // One separable pass along `axis`: out[o] = sum_k w[k] in[stride * o + offset + k] (zero beyond
 // the input). The other two axes keep their sizes.
 std::vector<float> filter_axis(const std::vector<float>& in, const std::array<int, 3>& in_dims, int axis, int out_count,
                                int stride, int offset, double sigma_nodes, std::array<int, 3>& out_dims) {
   int radius = 0;
-  const std::vector<double> w = gaussian_taps(sigma_nodes, radius);
+  const std::vector<double> w = detail::gaussian_taps(sigma_nodes, radius);
   out_dims = in_dims;
   out_dims[axis] = out_count;
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
@@ -64,21 +51,17 @@ std::vector<float> filter_axis(const std::vector<float>& in, const std::array<in
   return out;
 }
 
-// Opacity of one cell of length l is capped below 1 so that converting back stays finite:
-// -ln(1e-6) / l = 13.8 / l, a cell that lets through one millionth of the light.
-constexpr double kMaxOpacity = 1.0 - 1e-6;
-
 std::vector<float> to_opacity(const std::vector<float>& tau, double l) {
   std::vector<float> a(tau.size());
   for (std::size_t i = 0; i < tau.size(); ++i)
-    a[i] = static_cast<float>(std::min(kMaxOpacity, -std::expm1(-static_cast<double>(tau[i]) * l)));
+    a[i] = static_cast<float>(std::min(detail::kMaxOpacity, -std::expm1(-static_cast<double>(tau[i]) * l)));
   return a;
 }
 
 std::vector<float> to_extinction(const std::vector<float>& opacity, double l) {
   std::vector<float> t(opacity.size());
   for (std::size_t i = 0; i < opacity.size(); ++i) {
-    const double a = std::clamp(static_cast<double>(opacity[i]), 0.0, kMaxOpacity);
+    const double a = std::clamp(static_cast<double>(opacity[i]), 0.0, detail::kMaxOpacity);
     t[i] = static_cast<float>(-std::log1p(-a) / l);
   }
   return t;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "occlusion/pyramid_filter_taps.h"
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/gpu_occlusion.h"
@@ -27,21 +28,12 @@ using gpu::DeviceBuffer;
 using gpu::GlApi;
 
 constexpr int kLocalSize = 64;  // pyramid_filter.comp's local_size_x
-constexpr double kMaxOpacity = 1.0 - 1e-6;  // as extinction_pyramid.cpp
 constexpr const char* kWho = "gpu_build_pyramid_levels";
 
-// As extinction_pyramid.cpp's gaussian_taps: radius ceil(4 sigma), normalised by the full sum.
+// The CPU build's taps (pyramid_filter_taps.h) in float for the shader.
 std::vector<float> gaussian_taps(double sigma_nodes, int& radius) {
-  radius = std::max(1, static_cast<int>(std::ceil(4.0 * sigma_nodes)));
-  std::vector<double> w(static_cast<std::size_t>(2 * radius + 1));
-  double sum = 0;
-  for (int k = -radius; k <= radius; ++k) {
-    const double x = k / sigma_nodes;
-    sum += w[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * x * x);
-  }
-  std::vector<float> out(w.size());
-  for (std::size_t i = 0; i < w.size(); ++i) out[i] = static_cast<float>(w[i] / sum);
-  return out;
+  const std::vector<double> w = detail::gaussian_taps(sigma_nodes, radius);
+  return std::vector<float>(w.begin(), w.end());
 }
 
 std::size_t volume(const std::array<int, 3>& d) { return static_cast<std::size_t>(d[0]) * d[1] * d[2]; }
@@ -139,7 +131,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
     taps.reserve(gl, dev, 64 * sizeof(float), kWho, "Gaussian taps");
     auto u1i = [&](const char* name, int v) { gl.ProgramUniform1i(program, gl.GetUniformLocation(program, name), v); };
     gl.ProgramUniform1f(program, gl.GetUniformLocation(program, "u_cell"), static_cast<float>(cell));
-    gl.ProgramUniform1f(program, gl.GetUniformLocation(program, "u_max_opacity"), static_cast<float>(kMaxOpacity));
+    gl.ProgramUniform1f(program, gl.GetUniformLocation(program, "u_max_opacity"), static_cast<float>(detail::kMaxOpacity));
     auto run = [&](int mode, GLuint src, GLuint dst, std::size_t count, std::size_t dst_offset) {
       u1i("u_mode", mode);
       u1i("u_dst_offset", static_cast<int>(dst_offset));
