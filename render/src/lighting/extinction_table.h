@@ -35,6 +35,11 @@ public:
   }
 
   int piece(double s) const { return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin()); }
+  /// The pieces, for uploads: piece p (0 .. breakpoints().size(), p between breakpoints p - 1 and
+  /// p) is tau(s) = max(0, intercept(p) + slope(p) s).
+  const std::vector<double>& breakpoints() const { return m_x; }
+  double intercept(std::size_t p) const { return m_a[p]; }
+  double slope(std::size_t p) const { return m_b[p]; }
   /// piece(s), checking `hint` first: along a walk the scalar is continuous, so a segment
   /// usually starts in the piece where the previous one ended.
   int piece(double s, int hint) const {

@@ -53,7 +53,7 @@ public:
   /// A new grid (after construction or a change of resolution): uploads its mask and geometry.
   void set_grid(const Level0Grid& grid);
   /// A new field: the grid's extinction, each tet's linear scalar and the extinction table.
-  void set_field(const Level0Grid& grid, const Level1Field& field, const TransferFunction& tf);
+  void set_field(const Level0Grid& grid, const Level1Field& field);
 
   std::shared_ptr<GpuLightBuffers> new_light();
 

@@ -25,7 +25,7 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice>, const TetMesh&, const
 }
 GpuLightSolver::~GpuLightSolver() = default;
 void GpuLightSolver::set_grid(const Level0Grid&) { unavailable(); }
-void GpuLightSolver::set_field(const Level0Grid&, const Level1Field&, const TransferFunction&) { unavailable(); }
+void GpuLightSolver::set_field(const Level0Grid&, const Level1Field&) { unavailable(); }
 std::shared_ptr<GpuLightBuffers> GpuLightSolver::new_light() { unavailable(); }
 void GpuLightSolver::solve_level0(GpuLightBuffers&, const Light&, double, std::vector<float>&) { unavailable(); }
 void GpuLightSolver::set_order(GpuLightBuffers&, const VertexOrder&) { unavailable(); }

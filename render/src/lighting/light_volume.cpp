@@ -92,7 +92,6 @@ struct LightVolume::Impl {
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
-  TransferFunction tf;
   std::unique_ptr<lighting::GpuLightSolver> gpu;  // null: the CPU solves
   bool gpu_scatter_stale = true;                  // the device's scattering source is out of date
   bool has_field = false, resample_pending = false;
@@ -264,7 +263,6 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
               " values but the mesh has " + std::to_string(im.mesh->points.size()) + " points; expected one per point");
   tf.validate();
   im.scalars = point_scalars;
-  im.tf = tf;
   im.field.build(*im.mesh, im.scalars, tf);
   im.has_field = true;
   im.resample_pending = true;
@@ -320,7 +318,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (im.resample_pending) {
     const auto tr = Clock::now();
     im.grid.resample(*im.mesh, im.scalars, im.field.table);
-    if (im.gpu) im.gpu->set_field(im.grid, im.field, im.tf);
+    if (im.gpu) im.gpu->set_field(im.grid, im.field);
     im.resample_pending = false;
     report.resample_ms = ms_since(tr);
     did_work = true;

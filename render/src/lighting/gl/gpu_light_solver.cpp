@@ -277,7 +277,7 @@ void GpuLightSolver::set_grid(const Level0Grid& grid) {
   Impl::check_errors(gl, "uploading the level-0 grid");
 }
 
-void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field, const TransferFunction& tf) {
+void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field) {
   Impl& m = *m_impl;
   const std::size_t nt = m.mesh->tets.size();
   std::vector<float> tf4(4 * nt);
@@ -287,25 +287,15 @@ void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field,
     tf4[4 * t + 2] = static_cast<float>(field.grad[t].z);
     tf4[4 * t + 3] = static_cast<float>(field.base[t]);  // NaN stays NaN: no data
   }
-  // The extinction table of extinction_table.h (its pieces are private there, so they are
-  // rebuilt here the same way): tau linear in s between breakpoints, fitted from two samples
-  // inside each piece so that a step at either end is ignored, constant beyond the ends.
-  const std::vector<double> x = tf.breakpoints();
+  // The CPU walk's extinction table, piece by piece: tau linear in s between breakpoints.
+  const ExtinctionTable& table = field.table;
+  const std::vector<double>& x = table.breakpoints();
   const std::size_t n = x.size();
   std::vector<float> params(3 * n + 2);
   for (std::size_t i = 0; i < n; ++i) params[i] = static_cast<float>(x[i]);
   for (std::size_t p = 0; p <= n; ++p) {
-    double a = 0, b = 0;
-    if (p == 0 || p == n) {
-      a = tf.extinction(p == 0 ? -HUGE_VAL : HUGE_VAL);
-    } else {
-      const double lo = x[p - 1], hi = x[p];
-      const double s0 = lo + 0.25 * (hi - lo), s1 = lo + 0.75 * (hi - lo);
-      b = (tf.extinction(s1) - tf.extinction(s0)) / (s1 - s0);
-      a = tf.extinction(s0) - b * s0;
-    }
-    params[n + p] = static_cast<float>(a);
-    params[2 * n + 1 + p] = static_cast<float>(b);
+    params[n + p] = static_cast<float>(table.intercept(p));
+    params[2 * n + 1 + p] = static_cast<float>(table.slope(p));
   }
   m.breakpoint_count = static_cast<int>(n);
   m.occluder_offset = static_cast<int>(params.size());
