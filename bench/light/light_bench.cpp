@@ -112,7 +112,9 @@ int run(int argc, char** argv) {
   penumbra::require(!data_dir.empty(), "pnb_bench_light: --data-dir DIR is required");
   // Which lines to print: "sweep" (the Table 2 lines), "1m" (light-1m), "gpu" (light-1m on the
   // GPU, with "1m"), "budget" (light-budget).
-  const std::string parts = " " + pb::option(argc, argv, "parts", "sweep 1m gpu budget") + " ";
+  std::string parts = " ";
+  parts += pb::option(argc, argv, "parts", "sweep 1m gpu budget");
+  parts += " ";
   auto part = [&](const char* name) { return parts.find(std::string(" ") + name + " ") != std::string::npos; };
 
   const pb::Scene scene = pb::load_scene(name, data_dir);
@@ -302,15 +304,8 @@ int run(int argc, char** argv) {
     std::cout << line.dump() << std::endl;
 
     // The same cold update on the GPU; lv now holds the CPU's converged rho of the last light.
-    if (part("gpu") && pr::gpu_backend_compiled()) {
-      std::shared_ptr<pr::GpuDevice> device;
-      try {
-        pr::GpuOptions gpu_options;
-        gpu_options.log = [](const std::string&) {};
-        device = pr::GpuDevice::open(gpu_options);
-      } catch (const std::exception& e) {
-        std::cerr << "pnb_bench_light: no GPU line: " << e.what() << "\n";
-      }
+    if (part("gpu")) {
+      const std::shared_ptr<pr::GpuDevice> device = pb::open_bench_gpu("pnb_bench_light");
       if (device) {
         pr::LightVolumeOptions gopt = opt;
         gopt.device = device;

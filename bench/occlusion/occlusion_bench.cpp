@@ -413,16 +413,8 @@ int run(int argc, char** argv) {
   emit("shadow-light-volume", 0, t, image, with_mc ? &hard_image : nullptr);
 
   // The GPU path: the same modes with the cones traced and the frame rendered on the device.
-  std::shared_ptr<pr::GpuDevice> device;
-  if (gpu_option == "on" && pr::gpu_backend_compiled()) {
-    try {
-      pr::GpuOptions gpu_options;
-      gpu_options.log = [](const std::string&) {};
-      device = pr::GpuDevice::open(gpu_options);
-    } catch (const std::exception& e) {
-      std::cerr << "pnb_bench_occlusion: no GPU lines: " << e.what() << "\n";
-    }
-  }
+  const std::shared_ptr<pr::GpuDevice> device =
+      gpu_option == "on" ? pb::open_bench_gpu("pnb_bench_occlusion") : nullptr;
   if (!device) return 0;
   const pr::GpuExtinctionPyramid gpu_pyramid(device, pyramid);
   // The same pyramid filtered on the device (second build timed: the first JIT-compiles the shader

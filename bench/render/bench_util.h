@@ -6,8 +6,12 @@
 #include <cstdio>
 #include <exception>
 #include <fstream>
+#include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "penumbra/render/gpu_ray_caster.h"
 
 namespace penumbra::bench {
 
@@ -68,6 +72,20 @@ inline ImageError compare_rgb8(const std::vector<unsigned char>& image, const st
   }
   if (!image.empty()) e.rms_pct = 100.0 * std::sqrt(sum / static_cast<double>(image.size())) / 255.0;
   return e;
+}
+
+/// The device for a benchmark's GPU lines, its log silenced; null, with the reason on stderr, when
+/// the build has no GPU backend or no device opens (the CPU lines still run).
+inline std::shared_ptr<render::GpuDevice> open_bench_gpu(const char* program) {
+  if (!render::gpu_backend_compiled()) return nullptr;
+  try {
+    render::GpuOptions options;
+    options.log = [](const std::string&) {};
+    return render::GpuDevice::open(options);
+  } catch (const std::exception& e) {
+    std::cerr << program << ": no GPU lines: " << e.what() << "\n";
+    return nullptr;
+  }
 }
 
 }  // namespace penumbra::bench
