@@ -11,6 +11,7 @@
 #include "penumbra/compression/version.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
+#include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
 
@@ -135,14 +136,7 @@ TEST(AlignedVq, WarmStartFromAStaleCodebookIsRetrainedCold) {
 // ---- files ---------------------------------------------------------------------------------
 
 std::shared_ptr<const CompressedField> write_field(const SyntheticField& f, const std::string& path, CodecParams p) {
-  StreamingOptions o;
-  o.path = path;
-  o.field_name = "front";
-  o.vertex_count = f.vertices;
-  o.codec = p;
-  StreamingEncoder enc(o);
-  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
-  enc.finish();
+  testing::stream_field(f, path, p, "front");
   return CompressedField::open(path);
 }
 

@@ -7,6 +7,7 @@
 #include "penumbra/compression/streaming_encoder.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
+#include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
 
@@ -17,14 +18,7 @@ using testing::temp_path;
 
 // Writes f with the streaming encoder (window 8, small codebooks keep the file small).
 void write_field(const testing::SyntheticField& f, const std::string& path, CodecParams p) {
-  StreamingOptions o;
-  o.path = path;
-  o.field_name = "temperature";
-  o.vertex_count = f.vertices;
-  o.codec = p;
-  StreamingEncoder enc(o);
-  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
-  enc.finish();
+  testing::stream_field(f, path, p, "temperature");
 }
 
 CodecParams small_params(ErrorBound bound = {}) {

@@ -8,6 +8,7 @@
 #include "penumbra/compression/pager.h"
 #include "penumbra/compression/streaming_encoder.h"
 #include "penumbra/core/error.h"
+#include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
 
@@ -19,16 +20,8 @@ using testing::temp_path;
 std::shared_ptr<const CompressedField> make_field(const testing::SyntheticField& f, const std::string& path,
                                                   CodecParams p, StreamingStats* stats = nullptr,
                                                   std::uint64_t budget = 0) {
-  StreamingOptions o;
-  o.path = path;
-  o.field_name = "f";
-  o.vertex_count = f.vertices;
-  o.codec = p;
-  o.memory_budget_bytes = budget;
-  StreamingEncoder enc(o);
-  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
-  enc.finish();
-  if (stats) *stats = enc.stats();
+  const StreamingStats s = testing::stream_field(f, path, p, "f", budget);
+  if (stats) *stats = s;
   return CompressedField::open(path);
 }
 
