@@ -36,14 +36,12 @@ inline bool canonical_face_inward(const TetMesh& mesh, std::int32_t t, int j) {
   const FacePlane f = canonical_face(mesh, t, j);
   return dot(f.n, mesh.points[static_cast<std::size_t>(mesh.tets[static_cast<std::size_t>(t)][j])] - f.a) > 0;
 }
-/// face_plane with the orientation already known (canonical_face_inward, cached per tet).
+/// The outward plane of face j of tet t, given canonical_face_inward(mesh, t, j) (which the
+/// level-1 topology caches per tet).
 inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j, bool inward) {
   FacePlane f = canonical_face(mesh, t, j);
   f.n = f.n * (inward ? -1.0 : 1.0);
   return f;
-}
-inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j) {
-  return face_plane(mesh, t, j, canonical_face_inward(mesh, t, j));
 }
 
 /// Barycentric coordinates of p in tet t by signed volumes (sum to 1 up to rounding).
