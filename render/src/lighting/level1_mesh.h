@@ -36,10 +36,6 @@ struct Level1Field {
   ExtinctionTable table;
 
   void build(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf);
-  double scalar(const TetMesh& mesh, std::int32_t t, const Vec3d& p) const {
-    const auto tt = static_cast<std::size_t>(t);
-    return base[tt] + dot(grad[tt], p - mesh.points[static_cast<std::size_t>(mesh.tets[tt][0])]);
-  }
 };
 
 }  // namespace penumbra::render::lighting
