@@ -15,6 +15,16 @@ inline std::int64_t predict(std::uint32_t predictor, std::uint32_t t, std::int64
   return predictor == 1 && t >= 2 ? 2 * k1 - k2 : k1;
 }
 
+/// The decoder's k_t from k_{t-1}, k_{t-2} and the prediction error `delta`, in wrapping 32-bit
+/// arithmetic: every valid k lies in [0, 2^31), so the wrapped sum is exact, and vector lanes
+/// (section_lanes.h) compute the very same integers.
+inline std::int32_t next_k(std::uint32_t predictor, std::uint32_t t, std::int32_t k1, std::int32_t k2,
+                           std::int32_t delta) {
+  const std::uint32_t prediction =
+      predictor == 1 && t >= 2 ? 2u * std::uint32_t(k1) - std::uint32_t(k2) : std::uint32_t(k1);
+  return std::int32_t(prediction + std::uint32_t(delta));
+}
+
 inline std::uint64_t predictive_vertex_bits(std::uint32_t first_width, std::uint32_t steps, std::uint32_t width) {
   return 1 + first_width + std::uint64_t(steps - 1) * width;
 }

@@ -5,8 +5,11 @@
 #include <vector>
 
 #include "bit_io.h"
+#include "cursor_state.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
+#include "section_lanes.h"
+#include "step_base.h"
 #include "vertex_section.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
@@ -112,10 +115,15 @@ void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
   const std::uint8_t* data = p.blocks.payload.data();
   const std::uint32_t pb = detail::position_bits(p.step_count);
   const float step = p.step;
-  thread_local std::vector<std::uint32_t> special;
+  thread_local std::vector<std::uint64_t> special;
   special.clear();
   const std::uint8_t* widths = p.blocks.widths.data();
-  for (std::uint64_t v = b; v < e; ++v) {
+  std::uint64_t v = b;
+  if (detail::lanes_active()) {
+    v = b + (e - b) / detail::kLanes * detail::kLanes;
+    detail::residual_step_lanes(p, t, b, v, out, special);
+  }
+  for (; v < e; ++v) {
     if ((v & 15) == 0 && v + 16 <= e) {
       // Sparse residuals (most codes 0) skip 16 vertices per 8-byte load of their codes.
       std::uint64_t codes;
@@ -126,7 +134,7 @@ void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
       }
     }
     const std::uint32_t code = p.blocks.width(v);
-    if (code >= detail::kPatchedCode) special.push_back(std::uint32_t(v - b));
+    if (code >= detail::kPatchedCode) special.push_back(v);
     // Width 0 for special sections: reads nothing past their start (inside the payload).
     const std::uint32_t w = code < detail::kPatchedCode ? code : 0;
     const std::uint32_t z = detail::read_bits_branchless(data, p.blocks.section_start(v) + std::uint64_t(t) * w, w);
@@ -134,8 +142,7 @@ void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
     const float with_residual = out[v] + float(detail::unzigzag(z)) * step;
     out[v] = w ? with_residual : out[v];
   }
-  for (const std::uint32_t i : special) {
-    const std::uint64_t v = b + i;
+  for (const std::uint64_t v : special) {
     const std::uint64_t pos = p.blocks.section_start(v);
     if (p.blocks.width(v) == detail::kPatchedCode)
       out[v] = out[v] + float(detail::unzigzag(patched_value(data, pos, pb, t))) * step;
@@ -146,63 +153,17 @@ void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
 
 // k_t of a predictive section from k_0 and its prediction errors (O(t): each value depends on
 // the ones before it), and k_{t-1} in *previous. `scratch` holds step_count integers.
-std::int64_t predictive_k(const EncodedPage& p, const std::uint8_t* data, const detail::VertexSection& s,
-                          std::uint32_t t, std::uint32_t* scratch, std::int64_t* previous = nullptr) {
-  std::int64_t k = std::int64_t(s.first_value), k2 = k;
+std::int32_t predictive_k(const EncodedPage& p, const std::uint8_t* data, const detail::VertexSection& s,
+                          std::uint32_t t, std::uint32_t* scratch, std::int32_t* previous = nullptr) {
+  std::int32_t k = std::int32_t(s.first_value), k2 = k;
   if (t > 0) detail::all_values(data, s.values, p.step_count - 1, scratch);
   for (std::uint32_t i = 1; i <= t; ++i) {
-    const std::int64_t next = detail::predict(s.predictor, i, k, k2) + detail::unzigzag(scratch[i - 1]);
+    const std::int32_t next = detail::next_k(s.predictor, i, k, k2, detail::unzigzag(scratch[i - 1]));
     k2 = k;
     k = next;
   }
   if (previous) *previous = k2;
   return k;
-}
-
-// Step t of a predictive page for vertices [b, e), each from the start of its section; k1/k2
-// (optional) receive k_t and k_{t-1} for a StepCursor.
-void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
-                           std::int64_t* k1 = nullptr, std::int64_t* k2 = nullptr) {
-  const std::uint8_t* data = p.blocks.payload.data();
-  thread_local std::vector<std::uint32_t> scratch;
-  scratch.resize(p.step_count);
-  detail::VertexSection s;
-  for (std::uint64_t v = b; v < e; ++v) {
-    detail::parse_vertex(p, data, p.blocks.section_start(v), p.blocks.width(v), kNoLimit, s);
-    if (s.code == BitBlocks::kRawWidth) {
-      out[v] = detail::bits_float(detail::read_bits(data, s.start + 32ull * t, 32));
-      continue;
-    }
-    std::int64_t previous;
-    const std::int64_t k = predictive_k(p, data, s, t, scratch.data(), &previous);
-    out[v] = p.lo + float(k) * p.step;
-    if (k1) k1[v] = k, k2[v] = previous;
-  }
-}
-
-// Step t of a predictive page from each vertex's k_{t-1}, k_{t-2} (updated in place): O(1).
-void predictive_advance_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
-                              std::int64_t* k1, std::int64_t* k2) {
-  const std::uint8_t* data = p.blocks.payload.data();
-  const std::uint32_t pb = detail::position_bits(p.step_count - 1);
-  for (std::uint64_t v = b; v < e; ++v) {
-    const std::uint32_t code = p.blocks.width(v);
-    const std::uint64_t pos = p.blocks.section_start(v);
-    if (code == BitBlocks::kRawWidth) {
-      out[v] = detail::bits_float(detail::read_bits(data, pos + 32ull * t, 32));
-      continue;
-    }
-    // Section: predictor bit, k_0, then the prediction errors (vertex_section.h).
-    const std::uint32_t predictor = detail::read_bits(data, pos, 1);
-    const std::uint64_t values = pos + 1 + p.first_width;
-    const std::uint32_t z = code == detail::kPatchedCode
-                                ? patched_value(data, values, pb, t - 1)
-                                : detail::read_bits(data, values + std::uint64_t(t - 1) * code, code);
-    const std::int64_t k = detail::predict(predictor, t, k1[v], k2[v]) + detail::unzigzag(z);
-    k2[v] = k1[v];
-    k1[v] = k;
-    out[v] = p.lo + float(k) * p.step;
-  }
 }
 
 // All steps of one vertex from its section; `out` holds the VQ base (vq_residual), stride apart.
@@ -214,10 +175,10 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
       out[t * stride] = detail::bits_float(detail::read_bits(data, s.start + 32ull * t, 32));
   } else if (p.method == PageMethod::predictive) {
     detail::all_values(data, s.values, n - 1, scratch);
-    std::int64_t k = std::int64_t(s.first_value), k2 = k;
+    std::int32_t k = std::int32_t(s.first_value), k2 = k;
     out[0] = p.lo + float(k) * p.step;
     for (std::uint32_t t = 1; t < n; ++t) {
-      const std::int64_t next = detail::predict(s.predictor, t, k, k2) + detail::unzigzag(scratch[t - 1]);
+      const std::int32_t next = detail::next_k(s.predictor, t, k, k2, detail::unzigzag(scratch[t - 1]));
       k2 = k;
       k = next;
       out[t * stride] = p.lo + float(k) * p.step;
@@ -231,56 +192,61 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
 
 }  // namespace
 
+namespace detail {
+
+void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
+                           std::int32_t* k1, std::int32_t* k2) {
+  const std::uint8_t* data = p.blocks.payload.data();
+  thread_local std::vector<std::uint32_t> scratch;
+  scratch.resize(p.step_count);
+  VertexSection s;
+  for (std::uint64_t v = b; v < e; ++v) {
+    parse_vertex(p, data, p.blocks.section_start(v), p.blocks.width(v), kNoLimit, s);
+    if (s.code == BitBlocks::kRawWidth) {
+      out[v] = bits_float(read_bits(data, s.start + 32ull * t, 32));
+      continue;
+    }
+    std::int32_t previous;
+    const std::int32_t k = compression::predictive_k(p, data, s, t, scratch.data(), &previous);
+    out[v] = p.lo + float(k) * p.step;
+    if (k1) k1[v] = k, k2[v] = previous;
+  }
+}
+
+
+StepTables step_tables(const EncodedPage& p, std::uint32_t t) {
+  StepTables tables;
+  if (is_vq(p)) compression::step_tables(p, t, tables.t8, tables.tw);
+  return tables;
+}
+
+void vq_base_step(const EncodedPage& p, std::uint32_t t, const StepTables& tables, std::uint64_t b, std::uint64_t e,
+                  float* out) {
+  if (is_vq(p))
+    vq_base_range(p, tables.t8.data(), tables.tw.data(), b, e, out);
+  else
+    aligned_base_range(p, t, b, e, out);
+}
+
+}  // namespace detail
+
 void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
   require(out != nullptr, "decode_step: null output");
   require(t < p.step_count, "decode_step: step " + std::to_string(t) + " is outside the page's " +
                                 std::to_string(p.step_count) + " steps");
   const std::uint64_t N = p.vertex_count;
   if (p.method == PageMethod::predictive) {
-    parallel_for(N, kStepChunk / 4, [&](std::size_t b, std::size_t e) { predictive_step_range(p, t, b, e, out); });
+    parallel_for(N, kStepChunk / 4,
+                 [&](std::size_t b, std::size_t e) { detail::predictive_step_range(p, t, b, e, out); });
     return;
   }
-  std::vector<float> t8, tw;
-  if (is_vq(p)) step_tables(p, t, t8, tw);
+  const detail::StepTables tables = detail::step_tables(p, t);
   // VQ base and residual in one pass per chunk, while the chunk's outputs are in cache.
   const std::size_t chunk = has_residual(p) ? kStepChunk / 8 : is_vq(p) ? kStepChunk : kStepChunk / 4;
   parallel_for(N, chunk, [&](std::size_t b, std::size_t e) {
-    if (is_vq(p))
-      vq_base_range(p, t8.data(), tw.data(), b, e, out);
-    else
-      aligned_base_range(p, t, b, e, out);
+    detail::vq_base_step(p, t, tables, b, e, out);
     if (has_residual(p)) residual_step_range(p, t, b, e, out);
   });
-}
-
-void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uint32_t t, float* out) {
-  require(page != nullptr, "StepCursor::decode: null page");
-  const EncodedPage& p = *page;
-  if (p.method != PageMethod::predictive) {
-    m_page.reset();
-    decode_step(p, t, out);
-    return;
-  }
-  require(out != nullptr, "StepCursor::decode: null output");
-  require(t < p.step_count, "StepCursor::decode: step " + std::to_string(t) + " is outside the page's " +
-                                std::to_string(p.step_count) + " steps");
-  const std::uint64_t N = p.vertex_count;
-  const bool follows = m_page == page && t == m_step + 1;
-  if (m_page != page) {
-    m_page = page;
-    m_k1.assign(N, 0);
-    m_k2.assign(N, 0);
-  }
-  m_step = t;
-  if (follows) {
-    parallel_for(N, kStepChunk / 8, [&](std::size_t b, std::size_t e) {
-      predictive_advance_range(p, t, b, e, out, m_k1.data(), m_k2.data());
-    });
-  } else {
-    parallel_for(N, kStepChunk / 4, [&](std::size_t b, std::size_t e) {
-      predictive_step_range(p, t, b, e, out, m_k1.data(), m_k2.data());
-    });
-  }
 }
 
 void decode_window(const EncodedPage& p, float* out) {
@@ -328,16 +294,23 @@ void decode_window(const EncodedPage& p, float* out) {
         add_aligned(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b, out + std::uint64_t(t) * N + b);
     }
     if (!has_residual(p) && p.method != PageMethod::predictive) return;
-    std::vector<std::uint32_t> scratch(n);
+    thread_local std::vector<std::uint32_t> scratch;
+    thread_local std::vector<std::uint64_t> scalar;
+    scratch.resize(n);
+    scalar.clear();
+    std::uint64_t v = b;
+    if (detail::lanes_active()) {
+      v = b + (e - b) / detail::kLanes * detail::kLanes;
+      if (p.method == PageMethod::predictive)
+        detail::predictive_window_lanes(p, b, v, out, scalar);
+      else
+        detail::residual_window_lanes(p, b, v, out, scalar);
+    }
+    for (; v < e; ++v) scalar.push_back(v);
     detail::VertexSection s;
-    for (std::uint64_t g = b / kGroup; g * kGroup < e; ++g) {
-      std::uint64_t pos = p.blocks.group_offsets[g] * 8;
-      const std::uint64_t last = std::min(N, (g + 1) * kGroup);
-      for (std::uint64_t v = g * kGroup; v < last; ++v) {
-        detail::parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), kNoLimit, s);
-        section_all(p, p.blocks.payload.data(), s, out + v, N, scratch.data());
-        pos = s.end;
-      }
+    for (const std::uint64_t u : scalar) {
+      detail::parse_vertex(p, p.blocks.payload.data(), p.blocks.section_start(u), p.blocks.width(u), kNoLimit, s);
+      section_all(p, p.blocks.payload.data(), s, out + u, N, scratch.data());
     }
   });
 }

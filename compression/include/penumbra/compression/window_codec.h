@@ -9,6 +9,10 @@
 
 namespace penumbra::compression {
 
+namespace detail {
+struct CursorState;
+}
+
 /// Codebooks carried from one window to the next: LBG starts from them (warm start).
 struct WarmStart {
   std::vector<float> c8, cw;
@@ -45,20 +49,34 @@ float resolve_bound(const ErrorBound& bound, float value_min, float value_max);
 /// pages: O(local_step) per vertex; play them back with a StepCursor.
 void decode_step(const EncodedPage& page, std::uint32_t local_step, float* out);
 /// Sequential one-step decoding. A predictive page stores each value as the error of a
-/// prediction from the steps before it, so decode_step costs O(step) per vertex there; a
-/// cursor keeps every vertex's last two integers so that reading step t right after step t-1
-/// of the same page (playback) costs O(1) per vertex. Any other order, and every other method,
-/// decodes as decode_step does. Results are bit-identical to decode_step. Holds the page it
-/// follows and 16 bytes per vertex while that page is predictive.
+/// prediction from the steps before it, so decode_step costs O(step) per vertex there; and a
+/// patched section (a few outliers stored apart) is scanned for the step's exception. A cursor
+/// keeps, per vertex, the last two integers of a predictive page, where its values start and
+/// the position of its next exception, so that reading step t right after step t-1 of the same
+/// page (playback) costs O(1) per vertex for every page with bit blocks (residual or
+/// predictive). Any other order, and pages without bit blocks, decode as decode_step does.
+/// Results are bit-identical to decode_step. Holds the page it follows and, while that page
+/// has bit blocks, 8 bytes per vertex (16 on a predictive page).
 class StepCursor {
 public:
+  StepCursor();
+  ~StepCursor();
+  StepCursor(StepCursor&&) noexcept;
+  StepCursor& operator=(StepCursor&&) noexcept;
   void decode(const std::shared_ptr<const EncodedPage>& page, std::uint32_t local_step, float* out);
 
 private:
   std::shared_ptr<const EncodedPage> m_page;
-  std::uint32_t m_step = 0;           ///< the step m_k1 holds
-  std::vector<std::int64_t> m_k1, m_k2;  ///< k at m_step and m_step - 1 (raw vertices: unused)
+  std::uint32_t m_step = 0;  ///< the step last decoded from m_page
+  std::unique_ptr<detail::CursorState> m_state;
 };
+
+/// Whether the decoders may run 8 vertices per vector lane block (AVX2 gathers, where the CPU
+/// has them) for residual and predictive pages. On by default; results are bit-identical either
+/// way, so turning it off only serves to check that and to measure the gain. Process-wide.
+void set_vector_decode(bool enabled);
+/// True when the vector decoders run (the CPU has AVX2 and set_vector_decode left them on).
+bool vector_decode_active();
 
 /// Decodes the whole window, step-major: out[t * vertex_count + v], t < step_count.
 void decode_window(const EncodedPage& page, float* out);

@@ -1,0 +1,273 @@
+// compression/src/section_lanes.cpp
+#include "section_lanes.h"
+
+#include <immintrin.h>
+
+#include <atomic>
+#include <cstring>
+
+#include "bit_io.h"
+#include "cursor_state.h"
+#include "penumbra/compression/window_codec.h"
+#include "value_layout.h"
+#include "vertex_section.h"
+
+namespace penumbra::compression {
+
+namespace {
+std::atomic<bool> g_vector_decode{true};
+}
+
+void set_vector_decode(bool enabled) { g_vector_decode.store(enabled, std::memory_order_relaxed); }
+bool vector_decode_active() { return detail::lanes_active(); }
+
+namespace detail {
+
+bool lanes_active() {
+  static const bool cpu_has_avx2 = __builtin_cpu_supports("avx2");
+  return cpu_has_avx2 && g_vector_decode.load(std::memory_order_relaxed);
+}
+
+namespace {
+
+#define PNB_LANES __attribute__((target("avx2"), always_inline)) inline
+
+// Everything a lane block reads once: its codes, which lanes are special (patched or raw,
+// left to the scalar path), their plain widths (0 for special lanes, which then read only the
+// first bits of their own section, inside the payload) and the section starts relative to the
+// group's first byte.
+struct Block {
+  __m256i width, section, special;
+  const std::uint8_t* group;
+  int special_mask;
+  bool all_zero;
+};
+
+PNB_LANES Block load_block(const EncodedPage& p, std::uint64_t v) {
+  Block k;
+  std::uint32_t packed;
+  std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);  // 8 codes, low nibble first
+  k.all_zero = packed == 0;
+  const __m256i codes = _mm256_and_si256(
+      _mm256_srlv_epi32(_mm256_set1_epi32(int(packed)), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+      _mm256_set1_epi32(0xF));
+  k.special = _mm256_cmpgt_epi32(codes, _mm256_set1_epi32(int(kMaxPlainWidth)));
+  k.special_mask = _mm256_movemask_ps(_mm256_castsi256_ps(k.special));
+  k.width = _mm256_andnot_si256(k.special, codes);
+  k.section = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p.blocks.section_bits.data() + v));
+  // The 8 vertices of a block share a group (kGroupSize is a multiple of 8).
+  k.group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
+  return k;
+}
+
+PNB_LANES void list_special(const Block& k, std::uint64_t v, std::vector<std::uint64_t>& special) {
+  for (int m = k.special_mask; m; m &= m - 1) special.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
+}
+
+// `width` bits at bit offset `bit` from `group`, per lane: a 4-byte gather holds any plain value
+// (<= 13 bits after a shift of <= 7); the payload's 8 bytes of padding cover the last one.
+PNB_LANES __m256i read_lanes(const std::uint8_t* group, __m256i bit, __m256i width) {
+  const __m256i word =
+      _mm256_i32gather_epi32(reinterpret_cast<const int*>(group), _mm256_srli_epi32(bit, 3), 1);
+  const __m256i mask = _mm256_sub_epi32(_mm256_sllv_epi32(_mm256_set1_epi32(1), width), _mm256_set1_epi32(1));
+  return _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(bit, _mm256_set1_epi32(7))), mask);
+}
+
+PNB_LANES __m256i unzigzag_lanes(__m256i z) {
+  return _mm256_xor_si256(_mm256_srli_epi32(z, 1),
+                          _mm256_sub_epi32(_mm256_setzero_si256(), _mm256_and_si256(z, _mm256_set1_epi32(1))));
+}
+
+// Same float operations as the scalar decoders: convert, multiply, add; never fused (this
+// file's target has no FMA, and the module compiles with -ffp-contract=off).
+PNB_LANES __m256 add_scaled(__m256 base, __m256i q, __m256 step) {
+  return _mm256_add_ps(base, _mm256_mul_ps(_mm256_cvtepi32_ps(q), step));
+}
+
+PNB_LANES __m256 load(const float* at) { return _mm256_loadu_ps(at); }
+PNB_LANES void store(float* at, __m256 x) { _mm256_storeu_ps(at, x); }
+PNB_LANES __m256i load(const std::int32_t* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
+PNB_LANES void store(std::int32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
+
+// The prediction of k_t (predictive_layout.h) for lanes whose predictor bit is set in `linear`.
+PNB_LANES __m256i predict_lanes(__m256i linear, std::uint32_t t, __m256i k1, __m256i k2) {
+  if (t < 2) return k1;
+  const __m256i extrapolated = _mm256_sub_epi32(_mm256_add_epi32(k1, k1), k2);
+  return _mm256_blendv_epi8(k1, extrapolated, linear);
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) void residual_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
+                                                         std::uint64_t e, float* out,
+                                                         std::vector<std::uint64_t>& special) {
+  const __m256 step = _mm256_set1_ps(p.step);
+  const __m256i tt = _mm256_set1_epi32(int(t));
+  for (std::uint64_t v = b; v < e; v += kLanes) {
+    const Block k = load_block(p, v);
+    if (k.all_zero) continue;  // sparse residuals: nothing to add
+    list_special(k, v, special);
+    const __m256i z = read_lanes(k.group, _mm256_add_epi32(k.section, _mm256_mullo_epi32(tt, k.width)), k.width);
+    const __m256 base = load(out + v);
+    // Width 0 leaves the VQ value untouched (keeps -0.0f), as the scalar decoders do.
+    const __m256 adds = _mm256_castsi256_ps(_mm256_cmpgt_epi32(k.width, _mm256_setzero_si256()));
+    store(out + v, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(z), step), adds));
+  }
+}
+
+__attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
+                                                       std::uint64_t e, float* out, CursorState& s) {
+  const bool predictive = p.method == PageMethod::predictive;
+  const std::uint32_t i = predictive ? t - 1 : t;
+  const __m256i index = _mm256_set1_epi32(int(i)), one = _mm256_set1_epi32(1);
+  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  alignas(32) std::uint32_t patched[kLanes];
+  for (std::uint64_t v = b; v < e; v += kLanes) {
+    std::uint32_t packed;
+    std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);  // 8 codes, low nibble first
+    if (!predictive && packed == 0) continue;  // sparse residuals: nothing to add
+    const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
+    const __m256i width = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s.width.data() + v)));
+    const __m256i slot = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s.slot.data() + v));
+    const __m256i next = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s.next.data() + v)));
+    __m256i z = read_lanes(group, _mm256_add_epi32(slot, _mm256_mullo_epi32(index, width)), width);
+    // Exceptions are rare (a few per vertex-window): the lanes that meet one read it alone.
+    if (const int hits = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(next, index)))) {
+      _mm256_store_si256(reinterpret_cast<__m256i*>(patched), z);
+      for (int m = hits; m; m &= m - 1) {
+        const int l = __builtin_ctz(unsigned(m));
+        patched[l] = take_exception(p, v + std::uint64_t(l), s);
+      }
+      z = _mm256_load_si256(reinterpret_cast<const __m256i*>(patched));
+    }
+    if (predictive) {
+      const __m256i section = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p.blocks.section_bits.data() + v));
+      const __m256i linear = _mm256_cmpeq_epi32(read_lanes(group, section, one), one);
+      const __m256i k1 = load(s.k1.data() + v), k2 = load(s.k2.data() + v);
+      const __m256i k = _mm256_add_epi32(predict_lanes(linear, t, k1, k2), unzigzag_lanes(z));
+      store(out + v, add_scaled(lo, k, step));
+      store(s.k1.data() + v, k);
+      store(s.k2.data() + v, k1);
+    } else {
+      // Code 0 (all zero) leaves the VQ value untouched (keeps -0.0f), as the scalar path does.
+      const __m256i codes = _mm256_and_si256(
+          _mm256_srlv_epi32(_mm256_set1_epi32(int(packed)), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+          _mm256_set1_epi32(0xF));
+      const __m256 adds = _mm256_castsi256_ps(_mm256_cmpgt_epi32(codes, _mm256_setzero_si256()));
+      const __m256 base = load(out + v);
+      store(out + v, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(z), step), adds));
+    }
+  }
+}
+
+namespace {
+
+// One lane block of a whole-window decode: each lane's values (zigzag integers) unpacked into
+// a step-major buffer, patched lanes' exceptions written over their slots, so that the
+// prediction chain or the residual add then runs on whole vectors.
+struct WindowBlock {
+  static constexpr std::uint32_t kMaxCount = 1024;  // CodecParams::window's upper limit
+  alignas(32) std::uint32_t slot[kLanes], width[kLanes];
+  alignas(32) std::int32_t first[kLanes], linear[kLanes], adds[kLanes];
+  alignas(32) std::uint32_t z[kMaxCount * kLanes];
+  const std::uint8_t* group = nullptr;
+  int raw_mask = 0;
+};
+
+// Parses the 8 sections (scalar: once per vertex-window) and unpacks their `count` values.
+__attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uint64_t v, std::uint32_t count,
+                                                  WindowBlock& k) {
+  const std::uint8_t* data = p.blocks.payload.data();
+  const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
+  k.group = data + group_bit / 8;
+  k.raw_mask = 0;
+  VertexSection s;
+  int patched = 0;
+  ValueSpan spans[kLanes];
+  for (std::uint64_t l = 0; l < kLanes; ++l) {
+    const std::uint32_t code = p.blocks.width(v + l);
+    parse_vertex(p, data, group_bit + p.blocks.section_bits[v + l], code, ~0ull, s);
+    const bool raw = code == BitBlocks::kRawWidth;
+    k.raw_mask |= int(raw) << l;
+    patched |= int(code == kPatchedCode) << l;
+    spans[l] = s.values;
+    // A raw lane reads zero-width slots at its own start (inside the payload); the scalar
+    // path writes its values afterwards.
+    k.slot[l] = std::uint32_t((raw ? s.start : s.values.slots) - group_bit);
+    k.width[l] = raw ? 0 : s.values.width;
+    k.first[l] = std::int32_t(s.first_value);
+    k.linear[l] = s.predictor == 1 ? -1 : 0;
+    k.adds[l] = !raw && code != 0 ? -1 : 0;  // width 0 without exceptions adds nothing
+  }
+  __m256i bit = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.slot));
+  const __m256i width = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.width));
+  for (std::uint32_t i = 0; i < count; ++i) {
+    // Slots of patched lanes are up to 15 bits wide: still within one 4-byte gather.
+    _mm256_store_si256(reinterpret_cast<__m256i*>(k.z + i * kLanes), read_lanes(k.group, bit, width));
+    bit = _mm256_add_epi32(bit, width);
+  }
+  const std::uint32_t pb = position_bits(count);
+  for (int m = patched; m; m &= m - 1) {
+    const int l = __builtin_ctz(unsigned(m));
+    std::uint64_t at = spans[l].exception_list;
+    for (std::uint32_t e = 0; e < spans[l].exceptions; ++e, at += pb + spans[l].exception_width) {
+      const std::uint32_t i = read_bits(data, at, pb);
+      if (i < count) k.z[i * kLanes + std::uint32_t(l)] = read_bits(data, at + pb, spans[l].exception_width);
+    }
+  }
+}
+
+PNB_LANES __m256i load_z(const WindowBlock& k, std::uint32_t i) {
+  return _mm256_load_si256(reinterpret_cast<const __m256i*>(k.z + i * kLanes));
+}
+
+PNB_LANES void list_raw(int raw_mask, std::uint64_t v, std::vector<std::uint64_t>& special) {
+  for (int m = raw_mask; m; m &= m - 1) special.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
+                                                           float* window, std::vector<std::uint64_t>& special) {
+  const std::uint64_t N = p.vertex_count;
+  const __m256 step = _mm256_set1_ps(p.step);
+  thread_local WindowBlock k;
+  for (std::uint64_t v = b; v < e; v += kLanes) {
+    std::uint32_t packed;
+    std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);
+    if (packed == 0) continue;  // sparse residuals: nothing to add
+    unpack_block(p, v, p.step_count, k);
+    list_raw(k.raw_mask, v, special);
+    const __m256 adds = _mm256_load_ps(reinterpret_cast<const float*>(k.adds));
+    float* row = window + v;
+    for (std::uint32_t t = 0; t < p.step_count; ++t, row += N) {
+      const __m256 base = load(row);
+      store(row, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load_z(k, t)), step), adds));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
+                                                             float* window, std::vector<std::uint64_t>& special) {
+  const std::uint64_t N = p.vertex_count;
+  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  thread_local WindowBlock k;
+  for (std::uint64_t v = b; v < e; v += kLanes) {
+    unpack_block(p, v, p.step_count - 1, k);
+    list_raw(k.raw_mask, v, special);
+    const __m256i linear = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.linear));
+    __m256i k1 = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.first)), k2 = k1;
+    float* row = window + v;
+    store(row, add_scaled(lo, k1, step));
+    for (std::uint32_t t = 1; t < p.step_count; ++t) {
+      row += N;
+      const __m256i next = _mm256_add_epi32(predict_lanes(linear, t, k1, k2), unzigzag_lanes(load_z(k, t - 1)));
+      k2 = k1;
+      k1 = next;
+      store(row, add_scaled(lo, next, step));
+    }
+  }
+}
+
+}  // namespace detail
+}  // namespace penumbra::compression

@@ -1,0 +1,175 @@
+// tests/unit/compression/vector_decode_test.cpp -- the vector-lane decoders (8 vertices per AVX2
+// lane block) give the same bits as the scalar ones, on every page method with bit blocks and
+// every section kind (plain, patched, raw), for window, step and cursor decodes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
+
+#include "penumbra/compression/window_codec.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+using testing::SyntheticField;
+
+// Restores the default (vector decoders on) whatever a test does.
+struct VectorDecodeGuard {
+  ~VectorDecodeGuard() { set_vector_decode(true); }
+};
+
+struct Decodes {
+  std::vector<float> window, steps, cursor;
+};
+
+// The playback order a viewer produces: sequential, then jumps back, repeats and a restart.
+std::vector<std::uint32_t> playback_order(std::uint32_t n) {
+  std::vector<std::uint32_t> order;
+  for (std::uint32_t t = 0; t < n; ++t) order.push_back(t);
+  for (std::uint32_t t : {5u, 6u, 7u, n - 1, 0u, 1u, n / 2, n / 2, n / 2 + 1, n / 2 + 2}) order.push_back(t);
+  return order;
+}
+
+Decodes decode_all(const std::shared_ptr<const EncodedPage>& page, bool vector) {
+  set_vector_decode(vector);
+  const std::uint64_t N = page->vertex_count;
+  const std::uint32_t n = page->step_count;
+  Decodes d;
+  d.window.resize(N * n);
+  decode_window(*page, d.window.data());
+  d.steps.resize(N * n);
+  for (std::uint32_t t = 0; t < n; ++t) decode_step(*page, t, d.steps.data() + std::uint64_t(t) * N);
+  StepCursor cursor;
+  std::vector<float> step(N);
+  for (std::uint32_t t : playback_order(n)) {
+    cursor.decode(page, t, step.data());
+    d.cursor.insert(d.cursor.end(), step.begin(), step.end());
+  }
+  return d;
+}
+
+// Window, step and cursor decodes with and without lanes agree bit for bit (memcmp: -0.0f and
+// NaN payloads included), and every cursor step equals the window's row.
+void expect_lanes_match_scalar(const std::shared_ptr<const EncodedPage>& page, const char* what) {
+  const Decodes vec = decode_all(page, true), scalar = decode_all(page, false);
+  const std::uint64_t N = page->vertex_count;
+  ASSERT_EQ(0, std::memcmp(vec.window.data(), scalar.window.data(), vec.window.size() * 4)) << what;
+  ASSERT_EQ(0, std::memcmp(vec.steps.data(), scalar.steps.data(), vec.steps.size() * 4)) << what;
+  ASSERT_EQ(0, std::memcmp(vec.window.data(), vec.steps.data(), vec.window.size() * 4)) << what;
+  ASSERT_EQ(vec.cursor.size(), scalar.cursor.size());
+  ASSERT_EQ(0, std::memcmp(vec.cursor.data(), scalar.cursor.data(), vec.cursor.size() * 4)) << what;
+  const auto order = playback_order(page->step_count);
+  for (std::size_t i = 0; i < order.size(); ++i)
+    ASSERT_EQ(0, std::memcmp(vec.cursor.data() + i * N, vec.window.data() + std::uint64_t(order[i]) * N, N * 4))
+        << what << ": cursor read " << i << " (step " << order[i] << ")";
+}
+
+// Outliers inside the field's range (so the bound and the codebooks keep their scale): a
+// spike at one step makes a patched section (one exception), a vertex jumping between the
+// extremes at every step makes a raw one under a tight bound (most of its values wider than
+// the 15 bits a packed slot holds).
+void add_outliers(SyntheticField& f) {
+  const auto [lo, hi] = std::minmax_element(f.values.begin(), f.values.end());
+  const float low = *lo, high = *hi;
+  for (std::uint64_t v = 3; v < f.vertices; v += 11) f.values[(v % f.steps) * f.vertices + v] = v % 2 ? low : high;
+  for (std::uint64_t v = 7; v < f.vertices; v += 97)
+    for (std::uint32_t t = 0; t < f.steps; ++t) f.values[std::uint64_t(t) * f.vertices + v] = t % 2 ? low : high;
+}
+
+// Four oscillating sources (periods of 8 to 13 steps) with a spatial fall-off: a few temporal
+// shapes shared by many vertices, which VQ captures and a predictor does not.
+SyntheticField oscillating_sources(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  const double period[4] = {8, 9.5, 11, 13}, sx[4] = {0.2, 0.8, 0.5, 0.3}, sy[4] = {0.3, 0.7, 0.1, 0.9};
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    f.times[t] = t;
+    for (std::uint64_t v = 0; v < n; ++v) {
+      double x, y, value = 0;
+      testing::vertex_position(v, n, x, y);
+      for (int s = 0; s < 4; ++s) {
+        const double r2 = (x - sx[s]) * (x - sx[s]) + (y - sy[s]) * (y - sy[s]);
+        value += std::exp(-r2 / 0.05) * std::sin(2 * 3.14159265358979 * t / period[s] + s);
+      }
+      f.values[std::uint64_t(t) * n + v] = float(value);
+    }
+  }
+  return f;
+}
+
+std::shared_ptr<const EncodedPage> encode(const SyntheticField& f, std::uint32_t count, const CodecParams& p,
+                                          float bound) {
+  return std::make_shared<const EncodedPage>(
+      encode_window(f.values.data(), f.vertices, count, f.times.data(), 0, p, bound));
+}
+
+TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
+  VectorDecodeGuard guard;
+  // 3003 vertices: 375 lane blocks and a tail of 3 for the scalar path.
+  constexpr std::uint64_t N = 3003;
+  std::set<PageMethod> methods;
+  std::set<std::uint32_t> residual_codes, predictive_codes;
+
+  auto noise = testing::white_noise(N, 37);
+  add_outliers(noise);
+  CodecParams plain;
+  plain.aligned = false;
+  plain.codebook_size = 16;
+  auto blobs = testing::smooth_blobs(N, 40);
+  add_outliers(blobs);
+  auto waves = oscillating_sources(N, 64);
+  auto waves_outliers = waves;
+  add_outliers(waves_outliers);
+  const auto front = testing::relaxing_front(N, 64);
+  CodecParams aligned;
+  aligned.codebook_size = 32;
+
+  struct Case {
+    const char* what;
+    const SyntheticField* field;
+    std::uint32_t steps;
+    CodecParams params;
+    float bound;
+  };
+  const std::vector<Case> cases = {
+      {"noise, predictive", &noise, 37, CodecParams{}, 2e-2f * noise.range()},
+      {"noise, partial window", &noise, 21, CodecParams{}, 5e-3f * noise.range()},
+      {"noise, tight bound", &noise, 37, CodecParams{}, 1e-5f * noise.range()},
+      {"blobs, predictive", &blobs, 40, plain, 1e-3f * blobs.range()},
+      {"waves, residual", &waves, 64, plain, 1e-2f * waves.range()},
+      {"waves, sparse residual", &waves, 64, plain, 5e-2f * waves.range()},
+      {"waves with outliers, residual", &waves_outliers, 64, plain, 1e-2f * waves.range()},
+      {"waves with outliers, tight bound", &waves_outliers, 64, plain, 2e-4f * waves.range()},
+      {"waves with outliers, partial window", &waves_outliers, 29, plain, 1e-2f * waves.range()},
+      {"front, aligned residual", &front, 64, aligned, 1e-2f * front.range()},
+  };
+  for (const Case& c : cases) {
+    const auto page = encode(*c.field, c.steps, c.params, c.bound);
+    methods.insert(page->method);
+    auto& codes = page->method == PageMethod::predictive ? predictive_codes : residual_codes;
+    for (std::uint64_t v = 0; v < N; ++v) codes.insert(page->blocks.width(v));
+    expect_lanes_match_scalar(page, c.what);
+  }
+  // The cases reach what they are meant to: every method with bit blocks, and on both kinds
+  // of page empty (0), plain, patched (14) and raw (15) sections.
+  EXPECT_TRUE(methods.count(PageMethod::predictive));
+  EXPECT_TRUE(methods.count(PageMethod::vq_residual));
+  EXPECT_TRUE(methods.count(PageMethod::vq_aligned_residual));
+  for (const auto* codes : {&residual_codes, &predictive_codes}) {
+    EXPECT_TRUE(codes->count(0) && codes->count(14) && codes->count(15));
+    EXPECT_GE(codes->size(), 6u);  // and at least three plain widths
+  }
+}
+
+TEST(VectorDecode, CanBeTurnedOffAndOn) {
+  VectorDecodeGuard guard;
+  set_vector_decode(false);
+  EXPECT_FALSE(vector_decode_active());
+  set_vector_decode(true);
+  EXPECT_EQ(vector_decode_active(), __builtin_cpu_supports("avx2") != 0);
+}
+
+}  // namespace
+}  // namespace penumbra::compression
