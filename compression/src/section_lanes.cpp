@@ -3,6 +3,7 @@
 
 #include <immintrin.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 
@@ -37,31 +38,41 @@ namespace {
 // first bits of their own section, inside the payload) and the section starts relative to the
 // group's first byte.
 struct Block {
-  __m256i width, section, special;
+  __m256i width, section;
   const std::uint8_t* group;
   int special_mask;
   bool all_zero;
 };
 
-PNB_LANES Block load_block(const EncodedPage& p, std::uint64_t v) {
-  Block k;
+// The 4-bit codes of the 8 vertices from v (a multiple of 8), low nibble first.
+PNB_LANES std::uint32_t packed_codes(const EncodedPage& p, std::uint64_t v) {
   std::uint32_t packed;
-  std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);  // 8 codes, low nibble first
-  k.all_zero = packed == 0;
-  const __m256i codes = _mm256_and_si256(
+  std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);
+  return packed;
+}
+PNB_LANES __m256i unpack_codes(std::uint32_t packed) {
+  return _mm256_and_si256(
       _mm256_srlv_epi32(_mm256_set1_epi32(int(packed)), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
       _mm256_set1_epi32(0xF));
-  k.special = _mm256_cmpgt_epi32(codes, _mm256_set1_epi32(int(kMaxPlainWidth)));
-  k.special_mask = _mm256_movemask_ps(_mm256_castsi256_ps(k.special));
-  k.width = _mm256_andnot_si256(k.special, codes);
+}
+
+PNB_LANES Block load_block(const EncodedPage& p, std::uint64_t v) {
+  Block k;
+  const std::uint32_t packed = packed_codes(p, v);
+  k.all_zero = packed == 0;
+  const __m256i codes = unpack_codes(packed);
+  const __m256i special = _mm256_cmpgt_epi32(codes, _mm256_set1_epi32(int(kMaxPlainWidth)));
+  k.special_mask = _mm256_movemask_ps(_mm256_castsi256_ps(special));
+  k.width = _mm256_andnot_si256(special, codes);
   k.section = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p.blocks.section_bits.data() + v));
   // The 8 vertices of a block share a group (kGroupSize is a multiple of 8).
   k.group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
   return k;
 }
 
-PNB_LANES void list_special(const Block& k, std::uint64_t v, std::vector<std::uint64_t>& special) {
-  for (int m = k.special_mask; m; m &= m - 1) special.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
+// Appends the vertices of the lanes set in `mask` (block starting at v).
+PNB_LANES void list_lanes(int mask, std::uint64_t v, std::vector<std::uint64_t>& out) {
+  for (int m = mask; m; m &= m - 1) out.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
 }
 
 // `width` bits at bit offset `bit` from `group`, per lane: a 4-byte gather holds any plain value
@@ -106,7 +117,7 @@ __attribute__((target("avx2"))) void residual_step_lanes(const EncodedPage& p, s
   for (std::uint64_t v = b; v < e; v += kLanes) {
     const Block k = load_block(p, v);
     if (k.all_zero) continue;  // sparse residuals: nothing to add
-    list_special(k, v, special);
+    list_lanes(k.special_mask, v, special);
     const __m256i z = read_lanes(k.group, _mm256_add_epi32(k.section, _mm256_mullo_epi32(tt, k.width)), k.width);
     const __m256 base = load(out + v);
     // Width 0 leaves the VQ value untouched (keeps -0.0f), as the scalar decoders do.
@@ -123,8 +134,7 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   alignas(32) std::uint32_t patched[kLanes];
   for (std::uint64_t v = b; v < e; v += kLanes) {
-    std::uint32_t packed;
-    std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);  // 8 codes, low nibble first
+    const std::uint32_t packed = packed_codes(p, v);
     if (!predictive && packed == 0) continue;  // sparse residuals: nothing to add
     const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
     const __m256i width = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s.width.data() + v)));
@@ -150,10 +160,7 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
       store(s.k2.data() + v, k1);
     } else {
       // Code 0 (all zero) leaves the VQ value untouched (keeps -0.0f), as the scalar path does.
-      const __m256i codes = _mm256_and_si256(
-          _mm256_srlv_epi32(_mm256_set1_epi32(int(packed)), _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
-          _mm256_set1_epi32(0xF));
-      const __m256 adds = _mm256_castsi256_ps(_mm256_cmpgt_epi32(codes, _mm256_setzero_si256()));
+      const __m256 adds = _mm256_castsi256_ps(_mm256_cmpgt_epi32(unpack_codes(packed), _mm256_setzero_si256()));
       const __m256 base = load(out + v);
       store(out + v, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(z), step), adds));
     }
@@ -162,67 +169,70 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
 
 namespace {
 
-// One lane block of a whole-window decode: each lane's values (zigzag integers) unpacked into
-// a step-major buffer, patched lanes' exceptions written over their slots, so that the
-// prediction chain or the residual add then runs on whole vectors.
-struct WindowBlock {
-  static constexpr std::uint32_t kMaxCount = 1024;  // CodecParams::window's upper limit
-  alignas(32) std::uint32_t slot[kLanes], width[kLanes];
-  alignas(32) std::int32_t first[kLanes], linear[kLanes], adds[kLanes];
-  alignas(32) std::uint32_t z[kMaxCount * kLanes];
-  const std::uint8_t* group = nullptr;
-  int raw_mask = 0;
+// A whole-window decode runs kChunkLanes vertices (8 lane blocks) in lockstep, step by step,
+// so that each step's row gets 256 contiguous bytes at a time: with one block per pass, the
+// window's rows took 32 bytes each, more concurrent write streams than the caches prefetch,
+// and the decode ran at a third of memcpy when its output was not already cached.
+constexpr std::uint64_t kChunkLanes = 64;
+
+// Each lane's values (zigzag integers) unpacked step-major, patched lanes' exceptions written
+// over their slots; then the prediction chain or the residual add runs on whole vectors.
+struct WindowChunk {
+  alignas(32) std::int32_t first[kChunkLanes], linear[kChunkLanes], adds[kChunkLanes];
+  std::vector<std::uint32_t> z;  ///< value i of lane j at z[i * kChunkLanes + j]
 };
 
-// Parses the 8 sections (scalar: once per vertex-window) and unpacks their `count` values.
-__attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uint64_t v, std::uint32_t count,
-                                                  WindowBlock& k) {
+// Parses the 8 sections from vertex v (scalar: once per vertex-window) and unpacks their
+// `count` values into lanes j0..j0+7 of the chunk; raw vertices go to `raw`.
+__attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uint64_t v, std::uint64_t j0,
+                                                  std::uint32_t count, WindowChunk& c,
+                                                  std::vector<std::uint64_t>& raw) {
   const std::uint8_t* data = p.blocks.payload.data();
   const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
-  k.group = data + group_bit / 8;
-  k.raw_mask = 0;
+  const std::uint8_t* group = data + group_bit / 8;
+  alignas(32) std::uint32_t slot[kLanes], width[kLanes];
   VertexSection s;
   int patched = 0;
   ValueSpan spans[kLanes];
   for (std::uint64_t l = 0; l < kLanes; ++l) {
     const std::uint32_t code = p.blocks.width(v + l);
     parse_vertex(p, data, group_bit + p.blocks.section_bits[v + l], code, ~0ull, s);
-    const bool raw = code == BitBlocks::kRawWidth;
-    k.raw_mask |= int(raw) << l;
+    const bool is_raw = code == BitBlocks::kRawWidth;
+    if (is_raw) raw.push_back(v + l);
     patched |= int(code == kPatchedCode) << l;
     spans[l] = s.values;
     // A raw lane reads zero-width slots at its own start (inside the payload); the scalar
     // path writes its values afterwards.
-    k.slot[l] = std::uint32_t((raw ? s.start : s.values.slots) - group_bit);
-    k.width[l] = raw ? 0 : s.values.width;
-    k.first[l] = std::int32_t(s.first_value);
-    k.linear[l] = s.predictor == 1 ? -1 : 0;
-    k.adds[l] = !raw && code != 0 ? -1 : 0;  // width 0 without exceptions adds nothing
+    slot[l] = std::uint32_t((is_raw ? s.start : s.values.slots) - group_bit);
+    width[l] = is_raw ? 0 : s.values.width;
+    c.first[j0 + l] = std::int32_t(s.first_value);
+    c.linear[j0 + l] = s.predictor == 1 ? -1 : 0;
+    c.adds[j0 + l] = !is_raw && code != 0 ? -1 : 0;  // width 0 without exceptions adds nothing
   }
-  __m256i bit = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.slot));
-  const __m256i width = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.width));
-  for (std::uint32_t i = 0; i < count; ++i) {
+  __m256i bit = _mm256_load_si256(reinterpret_cast<const __m256i*>(slot));
+  const __m256i w = _mm256_load_si256(reinterpret_cast<const __m256i*>(width));
+  std::uint32_t* z = c.z.data() + j0;
+  for (std::uint32_t i = 0; i < count; ++i, z += kChunkLanes) {
     // Slots of patched lanes are up to 15 bits wide: still within one 4-byte gather.
-    _mm256_store_si256(reinterpret_cast<__m256i*>(k.z + i * kLanes), read_lanes(k.group, bit, width));
-    bit = _mm256_add_epi32(bit, width);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(z), read_lanes(group, bit, w));
+    bit = _mm256_add_epi32(bit, w);
   }
   const std::uint32_t pb = position_bits(count);
   for (int m = patched; m; m &= m - 1) {
     const int l = __builtin_ctz(unsigned(m));
     std::uint64_t at = spans[l].exception_list;
-    for (std::uint32_t e = 0; e < spans[l].exceptions; ++e, at += pb + spans[l].exception_width) {
+    for (std::uint32_t x = 0; x < spans[l].exceptions; ++x, at += pb + spans[l].exception_width) {
       const std::uint32_t i = read_bits(data, at, pb);
-      if (i < count) k.z[i * kLanes + std::uint32_t(l)] = read_bits(data, at + pb, spans[l].exception_width);
+      if (i < count) c.z[i * kChunkLanes + j0 + std::uint32_t(l)] = read_bits(data, at + pb, spans[l].exception_width);
     }
   }
 }
 
-PNB_LANES __m256i load_z(const WindowBlock& k, std::uint32_t i) {
-  return _mm256_load_si256(reinterpret_cast<const __m256i*>(k.z + i * kLanes));
+PNB_LANES __m256i load_lanes(const std::int32_t* at) {
+  return _mm256_load_si256(reinterpret_cast<const __m256i*>(at));
 }
-
-PNB_LANES void list_raw(int raw_mask, std::uint64_t v, std::vector<std::uint64_t>& special) {
-  for (int m = raw_mask; m; m &= m - 1) special.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
+PNB_LANES __m256i load_lanes(const std::uint32_t* at) {  // inside a std::vector: unaligned
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));
 }
 
 }  // namespace
@@ -230,41 +240,57 @@ PNB_LANES void list_raw(int raw_mask, std::uint64_t v, std::vector<std::uint64_t
 __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
                                                            float* window, std::vector<std::uint64_t>& special) {
   const std::uint64_t N = p.vertex_count;
+  const std::uint32_t n = p.step_count;
   const __m256 step = _mm256_set1_ps(p.step);
-  thread_local WindowBlock k;
-  for (std::uint64_t v = b; v < e; v += kLanes) {
-    std::uint32_t packed;
-    std::memcpy(&packed, p.blocks.widths.data() + v / 2, 4);
-    if (packed == 0) continue;  // sparse residuals: nothing to add
-    unpack_block(p, v, p.step_count, k);
-    list_raw(k.raw_mask, v, special);
-    const __m256 adds = _mm256_load_ps(reinterpret_cast<const float*>(k.adds));
-    float* row = window + v;
-    for (std::uint32_t t = 0; t < p.step_count; ++t, row += N) {
-      const __m256 base = load(row);
-      store(row, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load_z(k, t)), step), adds));
-    }
+  thread_local WindowChunk c;
+  c.z.resize(std::size_t(n) * kChunkLanes);
+  for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
+    const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
+    std::uint64_t active[kChunkLanes / kLanes], count = 0;
+    for (std::uint64_t j = 0; j < lanes; j += kLanes)
+      if (packed_codes(p, v0 + j) != 0) {  // sparse residuals: all-zero blocks add nothing
+        unpack_block(p, v0 + j, j, n, c, special);
+        active[count++] = j;
+      }
+    float* row = window + v0;
+    const std::uint32_t* z = c.z.data();
+    for (std::uint32_t t = 0; t < n; ++t, row += N, z += kChunkLanes)
+      for (std::uint64_t a = 0; a < count; ++a) {
+        const std::uint64_t j = active[a];
+        const __m256 base = load(row + j);
+        const __m256 adds = _mm256_castsi256_ps(load_lanes(c.adds + j));
+        store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load_lanes(z + j)), step), adds));
+      }
   }
 }
 
 __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
                                                              float* window, std::vector<std::uint64_t>& special) {
   const std::uint64_t N = p.vertex_count;
+  const std::uint32_t n = p.step_count;
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
-  thread_local WindowBlock k;
-  for (std::uint64_t v = b; v < e; v += kLanes) {
-    unpack_block(p, v, p.step_count - 1, k);
-    list_raw(k.raw_mask, v, special);
-    const __m256i linear = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.linear));
-    __m256i k1 = _mm256_load_si256(reinterpret_cast<const __m256i*>(k.first)), k2 = k1;
-    float* row = window + v;
-    store(row, add_scaled(lo, k1, step));
-    for (std::uint32_t t = 1; t < p.step_count; ++t) {
+  thread_local WindowChunk c;
+  c.z.resize(std::size_t(n) * kChunkLanes);
+  for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
+    const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
+    for (std::uint64_t j = 0; j < lanes; j += kLanes) unpack_block(p, v0 + j, j, n - 1, c, special);
+    __m256i k1[kChunkLanes / kLanes], k2[kChunkLanes / kLanes];
+    float* row = window + v0;
+    for (std::uint64_t j = 0; j < lanes; j += kLanes) {
+      k1[j / kLanes] = k2[j / kLanes] = load_lanes(c.first + j);
+      store(row + j, add_scaled(lo, k1[j / kLanes], step));
+    }
+    const std::uint32_t* z = c.z.data();
+    for (std::uint32_t t = 1; t < n; ++t, z += kChunkLanes) {
       row += N;
-      const __m256i next = _mm256_add_epi32(predict_lanes(linear, t, k1, k2), unzigzag_lanes(load_z(k, t - 1)));
-      k2 = k1;
-      k1 = next;
-      store(row, add_scaled(lo, next, step));
+      for (std::uint64_t j = 0; j < lanes; j += kLanes) {
+        __m256i& a = k1[j / kLanes];
+        const __m256i next =
+            _mm256_add_epi32(predict_lanes(load_lanes(c.linear + j), t, a, k2[j / kLanes]), unzigzag_lanes(load_lanes(z + j)));
+        k2[j / kLanes] = a;
+        a = next;
+        store(row + j, add_scaled(lo, next, step));
+      }
     }
   }
 }
