@@ -169,24 +169,29 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
 
 namespace {
 
-// A whole-window decode runs kChunkLanes vertices (8 lane blocks) in lockstep, step by step,
-// so that each step's row gets 256 contiguous bytes at a time: with one block per pass, the
-// window's rows took 32 bytes each, more concurrent write streams than the caches prefetch,
-// and the decode ran at a third of memcpy when its output was not already cached.
-constexpr std::uint64_t kChunkLanes = 64;
+// A whole-window decode runs a chunk of vertices in lockstep, step by step, so that each step's
+// row gets a contiguous run: with one lane block per pass, the rows took 32 bytes each, more
+// concurrent write streams than the caches prefetch, and the decode ran at a third of memcpy
+// when its output was not already cached. Measured best: 64 vertices (256 bytes per row) for
+// residual pages, whose rows are read and written; 1024 (4 KB) for predictive ones, whose rows
+// are only written.
+constexpr std::uint64_t kResidualChunk = 64, kPredictiveChunk = 1024;
 
 // Each lane's values (zigzag integers) unpacked step-major, patched lanes' exceptions written
 // over their slots; then the prediction chain or the residual add runs on whole vectors.
+template <std::uint64_t kWidth>
 struct WindowChunk {
-  alignas(32) std::int32_t first[kChunkLanes], linear[kChunkLanes], adds[kChunkLanes];
-  std::vector<std::uint32_t> z;  ///< value i of lane j at z[i * kChunkLanes + j]
+  static constexpr std::uint64_t kLanesPerChunk = kWidth;
+  alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
+  std::vector<std::uint32_t> z;  ///< value i of lane j at z[i * kWidth + j]
 };
 
 // Parses the 8 sections from vertex v (scalar: once per vertex-window) and unpacks their
 // `count` values into lanes j0..j0+7 of the chunk; raw vertices go to `raw`.
+template <class Chunk>
 __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uint64_t v, std::uint64_t j0,
-                                                  std::uint32_t count, WindowChunk& c,
-                                                  std::vector<std::uint64_t>& raw) {
+                                                  std::uint32_t count, Chunk& c, std::vector<std::uint64_t>& raw) {
+  constexpr std::uint64_t kChunkLanes = Chunk::kLanesPerChunk;
   const std::uint8_t* data = p.blocks.payload.data();
   const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
   const std::uint8_t* group = data + group_bit / 8;
@@ -242,7 +247,8 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
   const __m256 step = _mm256_set1_ps(p.step);
-  thread_local WindowChunk c;
+  constexpr std::uint64_t kChunkLanes = kResidualChunk;
+  thread_local WindowChunk<kChunkLanes> c;
   c.z.resize(std::size_t(n) * kChunkLanes);
   for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
     const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
@@ -269,7 +275,8 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
-  thread_local WindowChunk c;
+  constexpr std::uint64_t kChunkLanes = kPredictiveChunk;
+  thread_local WindowChunk<kChunkLanes> c;
   c.z.resize(std::size_t(n) * kChunkLanes);
   for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
     const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
