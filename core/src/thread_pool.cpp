@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <cstdint>
 #include <cstdlib>
 #include <exception>
 #include <mutex>
@@ -10,6 +12,78 @@
 #include <vector>
 
 namespace penumbra {
+
+namespace {
+
+// Threads kept between calls: starting a thread costs about 40 us, which a one-step decode of
+// 100K vertices (about 250 us) or a light-volume piece of a frame budget cannot absorb. One job
+// at a time; a call that finds the pool busy (another thread's job, or a parallel_for inside a
+// body) starts its own threads as before, so nothing waits on the pool and nesting cannot
+// deadlock.
+class WorkerPool {
+public:
+  // Never destroyed: a parallel_for from another static's destructor, or from a thread still
+  // running at exit, must not meet a destroyed pool. The idle workers end with the process.
+  static WorkerPool& instance() {
+    static WorkerPool* pool = new WorkerPool(worker_count() > 1 ? worker_count() - 1 : 0);
+    return *pool;
+  }
+
+  /// Runs `work` on the caller and on up to `helpers` workers; false (nothing run) when the
+  /// pool is busy or too small.
+  bool try_run(unsigned helpers, const std::function<void()>& work) {
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      if (m_busy || helpers > m_threads.size()) return false;
+      m_busy = true;
+      m_job = &work;
+      m_wanted = helpers;
+      m_joined = 0;
+      ++m_generation;
+    }
+    m_wake.notify_all();
+    work();
+    std::unique_lock<std::mutex> lock(m_mutex);
+    // No worker may join after this: `work` refers to the caller's frame.
+    m_job = nullptr;
+    m_done.wait(lock, [&] { return m_running == 0; });
+    m_busy = false;
+    return true;
+  }
+
+private:
+  explicit WorkerPool(unsigned threads) {
+    for (unsigned i = 0; i < threads; ++i) m_threads.emplace_back([this] { serve(); });
+    for (auto& t : m_threads) t.detach();
+  }
+
+  void serve() {
+    std::uint64_t seen = 0;
+    std::unique_lock<std::mutex> lock(m_mutex);
+    for (;;) {
+      m_wake.wait(lock, [&] { return m_generation != seen; });
+      seen = m_generation;
+      if (m_job == nullptr || m_joined >= m_wanted) continue;
+      ++m_joined;
+      ++m_running;
+      const std::function<void()>* job = m_job;
+      lock.unlock();
+      (*job)();
+      lock.lock();
+      if (--m_running == 0) m_done.notify_all();
+    }
+  }
+
+  std::mutex m_mutex;
+  std::condition_variable m_wake, m_done;
+  std::vector<std::thread> m_threads;
+  const std::function<void()>* m_job = nullptr;
+  unsigned m_wanted = 0, m_joined = 0, m_running = 0;
+  std::uint64_t m_generation = 0;
+  bool m_busy = false;
+};
+
+}  // namespace
 
 unsigned worker_count() {
   if (const char* env = std::getenv("PNB_NUM_THREADS")) {
@@ -27,7 +101,7 @@ void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std
   std::atomic<std::size_t> next{0};
   std::exception_ptr failure;
   std::mutex failure_mutex;
-  auto work = [&] {
+  const std::function<void()> work = [&] {
     for (;;) {
       const std::size_t c = next.fetch_add(1);
       if (c >= chunks) return;
@@ -40,10 +114,14 @@ void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std
       }
     }
   };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+  if (threads <= 1) {
+    work();
+  } else if (!WorkerPool::instance().try_run(threads - 1, work)) {
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+  }
   if (failure) std::rethrow_exception(failure);
 }
 

@@ -2,6 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <mutex>
+#include <set>
+#include <thread>
 #include <stdexcept>
 #include <vector>
 
@@ -20,4 +24,55 @@ TEST(ThreadPool, RethrowsOnCaller) {
                  if (b == 50) throw std::runtime_error("boom");
                }),
                std::runtime_error);
+}
+
+TEST(ThreadPool, NestedCallsCompleteAndCoverEveryIndex) {
+  // A body that calls parallel_for finds the kept workers busy with the outer job; the inner
+  // call must still run (on threads of its own) rather than wait for them.
+  std::vector<std::atomic<int>> hits(64 * 257);
+  penumbra::parallel_for(64, 1, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i)
+      penumbra::parallel_for(257, 16, [&](std::size_t ib, std::size_t ie) {
+        for (std::size_t j = ib; j < ie; ++j) ++hits[i * 257 + j];
+      });
+  });
+  for (auto& h : hits) ASSERT_EQ(h.load(), 1);
+}
+
+TEST(ThreadPool, ConcurrentCallersFromSeveralThreadsEachGetTheirWork) {
+  // A background thread (an encoder, a pager) and the main thread call at the same time.
+  constexpr int kCallers = 4, kCalls = 200;
+  std::vector<std::atomic<long>> sums(kCallers);
+  std::vector<std::thread> callers;
+  for (int c = 0; c < kCallers; ++c)
+    callers.emplace_back([&, c] {
+      for (int k = 0; k < kCalls; ++k)
+        penumbra::parallel_for(1000, 7, [&](std::size_t b, std::size_t e) {
+          long s = 0;
+          for (std::size_t i = b; i < e; ++i) s += static_cast<long>(i);
+          sums[c] += s;
+        });
+    });
+  for (auto& t : callers) t.join();
+  for (auto& s : sums) EXPECT_EQ(s.load(), long(kCalls) * 999 * 1000 / 2);
+}
+
+TEST(ThreadPool, WorkersAreKeptBetweenCalls) {
+  // A helper thread that ran chunks of several calls is a kept one: thread_local storage
+  // starts afresh in every new thread, even one that reuses an old thread's id.
+  if (penumbra::worker_count() < 2) GTEST_SKIP() << "one worker: nothing to keep";
+  static thread_local int last_call = -1, calls_served = 0;
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<int> most_calls_on_a_helper{0};
+  for (int k = 0; k < 20; ++k)
+    penumbra::parallel_for(64, 1, [&](std::size_t, std::size_t) {
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+      if (std::this_thread::get_id() == caller || last_call == k) return;
+      last_call = k;
+      const int served = ++calls_served;
+      int seen = most_calls_on_a_helper.load();
+      while (served > seen && !most_calls_on_a_helper.compare_exchange_weak(seen, served)) {
+      }
+    });
+  EXPECT_GT(most_calls_on_a_helper.load(), 1);
 }
