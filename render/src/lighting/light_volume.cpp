@@ -89,6 +89,11 @@ struct LightVolume::Impl {
   LightVolumeOptions opt;
   lighting::Level1Topology topology;
   std::vector<float> scatter_weights;
+  lighting::ScatterPlan scatter_plan;
+  // The CPU sweeps' source and iterate in the plan's order (light_scattering.h), copied in when
+  // the source changes and back to rgb after each frame's sweeps.
+  std::vector<float> pre_planned, rgb_planned;
+  bool cpu_scatter_stale = true;
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
@@ -232,6 +237,7 @@ struct LightVolume::Impl {
     scatter_iterations = 0;
     combine_pending = false;
     gpu_scatter_stale = true;
+    cpu_scatter_stale = true;
   }
 };
 
@@ -245,6 +251,7 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
   im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
+  im.scatter_plan = lighting::plan_scatter(*im.mesh, im.topology, im.scatter_weights);
   if (im.opt.device)
     im.gpu = std::make_unique<lighting::GpuLightSolver>(im.opt.device, *im.mesh, im.topology, im.scatter_weights,
                                                         im.opt.occluders);
@@ -376,7 +383,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (!im.scatter_done && lights_settled) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
-    bool gpu_ran = false;
+    bool gpu_ran = false, cpu_ran = false;
     while (!im.scatter_done && allowed(im.last_sweep_ms)) {
       const auto tw = Clock::now();
       int ran = 1;
@@ -389,8 +396,14 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         ran = im.gpu->scatter(most, tolerance, im.opt.sigma_s, im.scatter_residual);
         gpu_ran = true;
       } else {
+        if (im.cpu_scatter_stale) {
+          lighting::to_plan_order(im.scatter_plan, im.pre, im.pre_planned);
+          lighting::to_plan_order(im.scatter_plan, im.rgb, im.rgb_planned);
+        }
+        im.cpu_scatter_stale = false;
         im.scatter_residual =
-            lighting::scatter_sweep(im.topology, im.scatter_weights, im.pre, im.opt.sigma_s, im.rgb, im.scratch0);
+            lighting::scatter_sweep(im.scatter_plan, im.pre_planned, im.opt.sigma_s, im.rgb_planned, im.scratch0);
+        cpu_ran = true;
       }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;
@@ -401,6 +414,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
+    if (cpu_ran) lighting::to_point_order(im.scatter_plan, im.rgb_planned, im.rgb);
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is

@@ -119,12 +119,18 @@ TEST(LightScattering, SweepExcludesNonFiniteValues) {
   const auto mesh = tet_block(4, 4, 4, {0, 0, 0}, {1, 1, 1});
   const render::lighting::Level1Topology topo(*mesh);
   const auto w = render::lighting::scatter_weights(*mesh, topo);
+  const auto plan = render::lighting::plan_scatter(*mesh, topo, w);
   std::vector<float> pre(3 * mesh->points.size(), 0.5f);
   pre[3 * 30 + 1] = std::nanf("");
   pre[3 * 40] = INFINITY;
-  std::vector<float> cur = pre, scratch;
-  for (int it = 0; it < 50; ++it) render::lighting::scatter_sweep(topo, w, pre, {1, 1, 1}, cur, scratch);
-  for (float v : cur) {
+  std::vector<float> planned_pre, cur, scratch;
+  render::lighting::to_plan_order(plan, pre, planned_pre);
+  cur = planned_pre;
+  for (int it = 0; it < 50; ++it) render::lighting::scatter_sweep(plan, planned_pre, {1, 1, 1}, cur, scratch);
+  std::vector<float> by_point;
+  render::lighting::to_point_order(plan, cur, by_point);
+  ASSERT_EQ(by_point.size(), pre.size());
+  for (float v : by_point) {
     ASSERT_TRUE(std::isfinite(v));
     EXPECT_NEAR(v, 0.5f, 1e-6f);  // a constant field, with two holes in it, stays constant
   }
@@ -136,13 +142,18 @@ TEST(LightScattering, SweepConvergesToTheImplicitStep) {
   const Scene sc;
   const render::lighting::Level1Topology topo(*sc.mesh);
   const auto w = render::lighting::scatter_weights(*sc.mesh, topo);
+  const auto plan = render::lighting::plan_scatter(*sc.mesh, topo, w);
   std::vector<float> pre(3 * sc.mesh->points.size());
   for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
     for (int c = 0; c < 3; ++c) pre[3 * p + c] = static_cast<float>(sc.s[p] * (c + 1));
   const std::array<double, 3> sigma{0.5, 2.0, 8.0};
-  std::vector<float> out = pre, scratch;
+  std::vector<float> planned_pre, planned, out, scratch;
+  render::lighting::to_plan_order(plan, pre, planned_pre);
+  planned = planned_pre;
   int iterations = 0;
-  while (render::lighting::scatter_sweep(topo, w, pre, sigma, out, scratch) > 1e-7 && iterations < 2000) ++iterations;
+  while (render::lighting::scatter_sweep(plan, planned_pre, sigma, planned, scratch) > 1e-7 && iterations < 2000)
+    ++iterations;
+  render::lighting::to_point_order(plan, planned, out);
   double worst = 0;
   for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
     for (int c = 0; c < 3; ++c) {
