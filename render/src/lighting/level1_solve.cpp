@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "penumbra/core/morton.h"
 #include "penumbra/core/thread_pool.h"
 #include "tet_geometry.h"
 
@@ -185,16 +186,28 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
 }
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
-  std::vector<std::pair<double, std::int32_t>> keyed;
-  keyed.reserve(mesh.points.size());
+  // This runs as one piece of a frame budget, so every stage is parallel: keys, the sort (two
+  // halves, then a merge), the Morton codes and the sorts within groups.
+  const std::size_t np = mesh.points.size();
   const Vec3d u = light.kind == Light::Kind::directional ? normalize(light.vector) : Vec3d{};
-  for (std::size_t p = 0; p < mesh.points.size(); ++p) {
-    if (topology.tet_offsets[p] == topology.tet_offsets[p + 1]) continue;  // in no tet
-    const Vec3d& x = mesh.points[p];
-    const double key = light.kind == Light::Kind::directional ? dot(x, u) : length(x - light.vector);
-    keyed.emplace_back(key, static_cast<std::int32_t>(p));
-  }
-  std::sort(keyed.begin(), keyed.end());
+  std::vector<double> key(np);
+  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p)
+      key[p] = light.kind == Light::Kind::directional ? dot(mesh.points[p], u) : length(mesh.points[p] - light.vector);
+  });
+  std::vector<std::pair<double, std::int32_t>> keyed;
+  keyed.reserve(np);
+  for (std::size_t p = 0; p < np; ++p)
+    if (topology.tet_offsets[p] != topology.tet_offsets[p + 1]) keyed.emplace_back(key[p], static_cast<std::int32_t>(p));
+  // (key, id) pairs are all distinct, so the halves sorted apart and merged give std::sort's order.
+  const auto middle = keyed.begin() + static_cast<std::ptrdiff_t>(keyed.size() / 2);
+  parallel_for(2, 1, [&](std::size_t h, std::size_t) {
+    if (h == 0)
+      std::sort(keyed.begin(), middle);
+    else
+      std::sort(middle, keyed.end());
+  });
+  std::inplace_merge(keyed.begin(), middle, keyed.end());
   VertexOrder order;
   order.vertices.reserve(keyed.size());
   double group_start = -HUGE_VAL;
@@ -206,41 +219,38 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
     order.vertices.push_back(keyed[i].second);
   }
   if (!keyed.empty()) order.group_end.push_back(keyed.size());
-  // Within a group any order is valid; a Morton (Z-order) curve keeps the walks of consecutive
-  // vertices in the same part of the mesh, and so of memory (sorted by key they would jump
-  // across the whole slab).
+  // Within a group any order is valid; a Morton (Z-order) curve of 20 bits per axis keeps the
+  // walks of consecutive vertices in the same part of the mesh, and so of memory (sorted by key
+  // they would jump across the whole slab).
   const Vec3d lo = mesh.bounds.lo, ext = mesh.bounds.hi - mesh.bounds.lo;
-  auto morton = [&](std::int32_t p) {
-    std::uint64_t code = 0;
-    const Vec3d& x = mesh.points[static_cast<std::size_t>(p)];
-    std::uint32_t c[3];
-    for (int a = 0; a < 3; ++a)
-      c[a] = static_cast<std::uint32_t>(std::clamp(ext[a] > 0 ? (x[a] - lo[a]) / ext[a] : 0.0, 0.0, 1.0) * 1048575.0);
-    for (int bit = 19; bit >= 0; --bit)
-      for (int a = 0; a < 3; ++a) code = (code << 1) | ((c[a] >> bit) & 1u);
-    return code;
-  };
-  std::vector<std::uint64_t> codes(mesh.points.size(), 0);
-  for (std::int32_t p : order.vertices) codes[static_cast<std::size_t>(p)] = morton(p);
-  std::size_t group_begin = 0;
-  for (std::size_t end : order.group_end) {
-    std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(group_begin),
-              order.vertices.begin() + static_cast<std::ptrdiff_t>(end), [&](std::int32_t a, std::int32_t b) {
-                return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
-              });
-    group_begin = end;
-  }
-  order.path_length.assign(mesh.points.size(), 0.0);
-  parallel_for(mesh.points.size(), 4096, [&](std::size_t b, std::size_t e) {
+  std::vector<std::uint64_t> codes(np, 0);
+  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) {
+      std::uint64_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double f = std::clamp(ext[a] > 0 ? (mesh.points[p][a] - lo[a]) / ext[a] : 0.0, 0.0, 1.0);
+        code |= spread_bits_3d(static_cast<std::uint32_t>(f * 1048575.0)) << (2 - a);  // x most significant
+      }
+      codes[p] = code;
+    }
+  });
+  const std::size_t groups = order.group_end.size();
+  order.group_of.assign(np, -1);
+  parallel_for(groups, 64, [&](std::size_t gb, std::size_t ge) {
+    for (std::size_t g = gb; g < ge; ++g) {
+      const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
+      std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(begin),
+                order.vertices.begin() + static_cast<std::ptrdiff_t>(end), [&](std::int32_t a, std::int32_t b) {
+                  return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
+                });
+      for (std::size_t i = begin; i < end; ++i)
+        order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
+    }
+  });
+  order.path_length.assign(np, 0.0);
+  parallel_for(np, 4096, [&](std::size_t b, std::size_t e) {
     for (std::size_t p = b; p < e; ++p) order.path_length[p] = box_path_length(mesh.bounds, mesh.points[p], light);
   });
-  order.group_of.assign(mesh.points.size(), -1);
-  std::size_t begin = 0;
-  for (std::size_t g = 0; g < order.group_end.size(); ++g) {
-    for (std::size_t i = begin; i < order.group_end[g]; ++i)
-      order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
-    begin = order.group_end[g];
-  }
   return order;
 }
 

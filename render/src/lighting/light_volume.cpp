@@ -101,7 +101,7 @@ struct LightVolume::Impl {
   bool gpu_scatter_stale = true;                  // the device's scattering source is out of date
   bool has_field = false, resample_pending = false;
   std::vector<LightState> lights;
-  std::vector<float> pre, rgb;
+  std::vector<float> pre, rgb, previous_pre;
   double pre_scale = 0;
   bool combine_pending = true, scatter_done = false;
   int scatter_iterations = 0;
@@ -208,28 +208,38 @@ struct LightVolume::Impl {
     return true;
   }
   void combine() {
+    // Runs inside a frame's budget after every level-1 piece: parallel, and into kept buffers
+    // (a fresh 12-byte-per-point vector each time cost page faults on top of the arithmetic).
     const std::size_t np = mesh->points.size();
-    std::vector<float> previous_pre = std::move(pre);
-    pre.assign(3 * np, 0.0f);
-    for (const auto& l : lights) {
-      if (!l.has_solution) continue;
-      for (std::size_t p = 0; p < np; ++p)
-        for (int c = 0; c < 3; ++c) pre[3 * p + c] += static_cast<float>(l.rho1[p] * l.light.color[c]);
-    }
-    pre_scale = 0;
-    for (float v : pre)
-      if (std::isfinite(v)) pre_scale = std::max(pre_scale, static_cast<double>(std::fabs(v)));
+    previous_pre.swap(pre);
+    pre.resize(3 * np);
     const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
-    // Warm start: the previous scattered field plus the change of its source (exact when the
-    // source changed by a constant); the first time, the unscattered field.
-    if (!scatter || !has_rgb || previous_pre.size() != pre.size()) {
-      rgb = pre;
-    } else {
-      for (std::size_t i = 0; i < rgb.size(); ++i) {
-        const float delta = pre[i] - previous_pre[i];
-        if (std::isfinite(delta)) rgb[i] += delta;
-      }
-    }
+    const bool warm = scatter && has_rgb && previous_pre.size() == pre.size();
+    if (!warm) rgb.resize(3 * np);
+    constexpr std::size_t kChunk = 1 << 14;
+    std::vector<double> scale((np + kChunk - 1) / kChunk, 0.0);
+    parallel_for(np, kChunk, [&](std::size_t b, std::size_t e) {
+      double chunk_scale = 0;
+      for (std::size_t p = b; p < e; ++p)
+        for (int c = 0; c < 3; ++c) {
+          float v = 0.0f;
+          for (const auto& l : lights)
+            if (l.has_solution) v += static_cast<float>(l.rho1[p] * l.light.color[c]);
+          const std::size_t i = 3 * p + c;
+          pre[i] = v;
+          if (std::isfinite(v)) chunk_scale = std::max(chunk_scale, static_cast<double>(std::fabs(v)));
+          // Warm start: the previous scattered field plus the change of its source (exact when
+          // the source changed by a constant); the first time, the unscattered field.
+          if (!warm) {
+            rgb[i] = v;
+          } else {
+            const float delta = v - previous_pre[i];
+            if (std::isfinite(delta)) rgb[i] += delta;
+          }
+        }
+      scale[b / kChunk] = chunk_scale;
+    });
+    pre_scale = scale.empty() ? 0.0 : *std::max_element(scale.begin(), scale.end());
     has_rgb = true;
     scatter_done = !scatter;
     scatter_converged = !scatter;
