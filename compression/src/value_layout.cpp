@@ -63,22 +63,6 @@ void write_values(BitWriter& writer, const std::uint32_t* z, std::uint32_t count
   for (std::uint32_t i = 0; i < count; ++i) writer.put(z[i] >= limit ? 0 : z[i], layout.width);
 }
 
-ValueSpan parse_values(const std::uint8_t* data, std::uint64_t pos, std::uint32_t code, std::uint32_t count) {
-  ValueSpan s;
-  if (code != kPatchedCode) {
-    s.width = code;
-    s.slots = s.exception_list = pos;
-  } else {
-    s.width = read_bits(data, pos, 4);
-    s.exceptions = read_bits(data, pos + 4, 4);
-    s.exception_width = read_bits(data, pos + 8, 5);
-    s.exception_list = pos + kPatchedHeaderBits;
-    s.slots = s.exception_list + std::uint64_t(s.exceptions) * (position_bits(count) + s.exception_width);
-  }
-  s.end = s.slots + std::uint64_t(count) * s.width;
-  return s;
-}
-
 std::uint32_t value_at(const std::uint8_t* data, const ValueSpan& s, std::uint32_t count, std::uint32_t i) {
   const std::uint32_t pb = position_bits(count);
   std::uint64_t at = s.exception_list;

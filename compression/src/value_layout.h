@@ -45,8 +45,25 @@ struct ValueSpan {
   std::uint32_t width = 0, exceptions = 0, exception_width = 0;
 };
 
-/// Reads the header (if patched) at pos; `code` is the vertex's 4-bit code (< 15).
-ValueSpan parse_values(const std::uint8_t* data, std::uint64_t pos, std::uint32_t code, std::uint32_t count);
+/// Reads the header (if patched) at pos; `code` is the vertex's 4-bit code (< 15). Inline: the
+/// decoders call it once per vertex-window, and a call returning the span through memory cost
+/// them a store-forwarding stall per vertex.
+inline ValueSpan parse_values(const std::uint8_t* data, std::uint64_t pos, std::uint32_t code, std::uint32_t count) {
+  ValueSpan s;
+  if (code != kPatchedCode) {
+    s.width = code;
+    s.slots = s.exception_list = pos;
+  } else {
+    s.width = read_bits(data, pos, 4);
+    s.exceptions = read_bits(data, pos + 4, 4);
+    s.exception_width = read_bits(data, pos + 8, 5);
+    s.exception_list = pos + kPatchedHeaderBits;
+    s.slots = s.exception_list + std::uint64_t(s.exceptions) * (position_bits(count) + s.exception_width);
+  }
+  s.end = s.slots + std::uint64_t(count) * s.width;
+  return s;
+}
+
 /// Bits the header of a patched layout needs before its size is known (bounds checks).
 inline std::uint64_t header_bits(std::uint32_t code) { return code == kPatchedCode ? kPatchedHeaderBits : 0; }
 
