@@ -14,6 +14,7 @@
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
+#include "vq_lanes.h"
 #include "vq_value.h"
 
 namespace penumbra::compression {
@@ -34,14 +35,8 @@ bool has_residual(const EncodedPage& p) {
 // One step of shift-aligned VQ for vertices [b, e): each vertex reads its entry at frame
 // position t + W - 1 - shift.
 void aligned_base_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
-  const std::uint32_t D = 2 * p.window - 1;
-  const float* ca = p.ca.data() + (p.window - 1 + t);
-  const std::uint16_t* mq = p.mean_q.data();
-  const std::uint8_t* ia = p.ia.data();
-  const std::uint8_t* shift = p.shift.data();
-  for (std::uint64_t v = b; v < e; ++v)
-    out[v] = detail::aligned_value(detail::dequantise_mean(p.mean_lo, p.mean_scale, mq[v]),
-                                   ca[std::ptrdiff_t(ia[v]) * D - shift[v]]);
+  detail::aligned_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.ca.data() + (p.window - 1 + t),
+                              p.ia.data() + b, p.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
 }
 
 // Column t of both codebooks: the 2 x K floats a one-step decode looks up.
@@ -56,28 +51,16 @@ void step_tables(const EncodedPage& p, std::uint32_t t, std::vector<float>& t8, 
 }
 
 // One step of the VQ part for vertices [b, e): the hot loop of a one-step decode.
-__attribute__((target_clones("avx2", "default"))) void vq_base_range(const EncodedPage& p, const float* t8,
-                                                                    const float* tw, std::uint64_t b,
-                                                                    std::uint64_t e, float* out) {
-  const float lo = p.mean_lo, scale = p.mean_scale;
-  const std::uint16_t* mq = p.mean_q.data();
-  const std::uint8_t* i8 = p.i8.data();
-  const std::uint8_t* iw = p.iw.data();
-  for (std::uint64_t v = b; v < e; ++v)
-    out[v] = detail::vq_value(detail::dequantise_mean(lo, scale, mq[v]), t8[i8[v]], tw[iw[v]]);
+void vq_base_range(const EncodedPage& p, const float* t8, const float* tw, std::uint64_t b, std::uint64_t e,
+                   float* out) {
+  detail::vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, tw, p.iw.data() + b, e - b,
+                         out + b);
 }
 
 constexpr std::uint64_t kNoLimit = ~0ull;
 
 void mean_plus_d8(const EncodedPage& p, const float* t8, std::uint64_t b, std::uint64_t e, float* base) {
-  for (std::uint64_t v = b; v < e; ++v)
-    base[v - b] = detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]) + t8[p.i8[v]];
-}
-
-// out[i] = base[i] + tw[iw[i]]: the hot loop of a full-window decode (AVX2 gathers if present).
-__attribute__((target_clones("avx2", "default"))) void add_dw(const float* tw, const std::uint8_t* iw,
-                                                                 const float* base, std::uint64_t count, float* out) {
-  for (std::uint64_t i = 0; i < count; ++i) out[i] = base[i] + tw[iw[i]];
+  detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, e - b, base);
 }
 
 // Zigzag value `i` of a patched span at bit `pos` (value_layout.h), inlined for the one-step
@@ -98,13 +81,6 @@ inline std::uint32_t patched_value(const std::uint8_t* data, std::uint64_t pos, 
   }
   const std::uint64_t slots = pos + detail::kPatchedHeaderBits + std::uint64_t(c) * entry;
   return detail::read_bits(data, slots + std::uint64_t(i) * w, w);
-}
-
-// out[i] = level[i] + ca_t[offset[i]]: the hot loop of a full-window decode of an aligned page.
-__attribute__((target_clones("avx2", "default"))) void add_aligned(const float* ca_t, const std::int32_t* offset,
-                                                                      const float* level, std::uint64_t count,
-                                                                      float* out) {
-  for (std::uint64_t i = 0; i < count; ++i) out[i] = detail::aligned_value(level[i], ca_t[offset[i]]);
 }
 
 // Adds the residual of step t to the VQ base of vertices [b, e) of a page with a residual:
@@ -276,7 +252,7 @@ void decode_window(const EncodedPage& p, float* out) {
       for (std::uint32_t t = 0; t < n; ++t) {
         const float* t8 = tables.data() + std::size_t(t) * 2 * p.codebook_size;
         if (t % block == 0) mean_plus_d8(p, t8, b, e, base.data());
-        add_dw(t8 + p.codebook_size, p.iw.data() + b, base.data(), e - b, out + std::uint64_t(t) * N + b);
+        detail::add_entries(t8 + p.codebook_size, p.iw.data() + b, base.data(), e - b, out + std::uint64_t(t) * N + b);
       }
     }
     if (is_aligned(p)) {
@@ -291,7 +267,8 @@ void decode_window(const EncodedPage& p, float* out) {
         offset[v - b] = std::int32_t(p.ia[v]) * D - std::int32_t(p.shift[v]);
       }
       for (std::uint32_t t = 0; t < n; ++t)
-        add_aligned(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b, out + std::uint64_t(t) * N + b);
+        detail::add_offsets(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
+                            out + std::uint64_t(t) * N + b);
     }
     if (!has_residual(p) && p.method != PageMethod::predictive) return;
     thread_local std::vector<std::uint32_t> scratch;

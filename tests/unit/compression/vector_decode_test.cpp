@@ -163,6 +163,27 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
   }
 }
 
+TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
+  // The codebook lookups (gathers) of pages without bit blocks.
+  VectorDecodeGuard guard;
+  constexpr std::uint64_t N = 3003;
+  const auto waves = oscillating_sources(N, 64);
+  const auto front = testing::relaxing_front(N, 64);
+  CodecParams plain;
+  plain.aligned = false;
+  plain.codebook_size = 16;
+  CodecParams aligned;
+  aligned.codebook_size = 32;
+  const auto vq = encode(waves, 64, plain, 0.0f);
+  const auto shifted = encode(front, 64, aligned, 0.0f);
+  const auto partial = encode(waves, 29, plain, 0.0f);
+  ASSERT_EQ(vq->method, PageMethod::vq);
+  ASSERT_EQ(shifted->method, PageMethod::vq_aligned);
+  expect_lanes_match_scalar(vq, "plain VQ");
+  expect_lanes_match_scalar(shifted, "aligned VQ");
+  expect_lanes_match_scalar(partial, "plain VQ, partial window");
+}
+
 TEST(VectorDecode, CanBeTurnedOffAndOn) {
   VectorDecodeGuard guard;
   set_vector_decode(false);

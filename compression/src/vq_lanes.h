@@ -1,0 +1,33 @@
+// compression/src/vq_lanes.h -- the VQ part of a decode, the table lookups done 8 vertices at a
+// time with AVX2 gathers where the CPU has them (private).
+//
+// GCC's generic tuning never emits gathers by itself, so these loops stayed scalar even in an
+// AVX2 build. Each function computes exactly the float operations of vq_value.h (convert,
+// multiply, add; never fused), with or without lanes.
+#pragma once
+#include <cstdint>
+
+namespace penumbra::compression::detail {
+
+/// out[i] = base[i] + table[index[i]] for i < count (a D_W lookup of a full-window decode).
+void add_entries(const float* table, const std::uint8_t* index, const float* base, std::uint64_t count, float* out);
+
+/// out[i] = level[i] + table[offset[i]] (an aligned page's full-window decode).
+void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out);
+
+/// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i]] (mean + D8 of a block of steps).
+void mean_plus_entries(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
+                       std::uint64_t count, float* out);
+
+/// out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[i8[i]], tw[iw[i]]): one step of
+/// a plain-VQ page.
+void vq_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
+                    const float* tw, const std::uint8_t* iw, std::uint64_t count, float* out);
+
+/// out[i] = aligned_value(dequantise_mean(lo, scale, mean_q[i]), table[ia[i] * stride - shift[i]]):
+/// one step of an aligned page (`table` already points at the step's frame position).
+void aligned_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* table,
+                         const std::uint8_t* ia, const std::uint8_t* shift, std::int32_t stride, std::uint64_t count,
+                         float* out);
+
+}  // namespace penumbra::compression::detail
