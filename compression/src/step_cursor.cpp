@@ -100,8 +100,9 @@ void cursor_step_vertex(const EncodedPage& p, std::uint32_t t, std::uint64_t v, 
 
 namespace {
 
-// Vertices per parallel chunk of a cursor step (about 1 ns each).
-constexpr std::size_t kChunk = 1 << 15;
+// Vertices per parallel chunk of a cursor step (about 1 ns each): small enough that the chunks
+// balance when a pager's background load takes a core for a while.
+constexpr std::size_t kChunk = 1 << 13;
 
 }  // namespace
 
@@ -131,17 +132,19 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
     detail::CursorState& s = *m_state;
     m_page = page;
     if (predictive) {
+      // k_t needs the t prediction errors before it: one pass from each section's start, then
+      // the next step reads value index t.
       s.k1.resize(N);
       s.k2.resize(N);
-      parallel_for(N, kChunk / 4, [&](std::size_t b, std::size_t e) {
+      parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
         detail::predictive_step_range(p, t, b, e, out, s.k1.data(), s.k2.data());
       });
-    } else {
-      decode_step(p, t, out);
+      detail::seek(p, t, s);
+      return;
     }
-    // The next step reads value index t + 1 (residual) or t (predictive).
-    detail::seek(p, predictive ? t : t + 1, s);
-    return;
+    // A residual value depends on nothing before it: point the cursor at step t and decode it
+    // as a following step would be.
+    detail::seek(p, t, s);
   }
   detail::CursorState& s = *m_state;
   const detail::StepTables tables = detail::step_tables(p, t);
