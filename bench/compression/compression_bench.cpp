@@ -125,13 +125,19 @@ Row run_penumbra(const Field& f, const std::string& scratch, pc::CodecParams par
   const double row_memcpy_gbps = double(copy.size()) * 4 / copy_s / 1e9;
   const Quality q = measure(f, out.data());
 
-  // One step for all vertices: sequential playback through the pager.
+  // One step for all vertices: sequential playback through a new pager (every page load
+  // included), best of 3 like the other timings, so that one-off costs of the process (the
+  // first read of the file, the first use of the worker threads) do not count.
   std::vector<float> step(f.vertices);
-  pc::Pager pager(field);
-  const auto t2 = Clock::now();
-  for (std::uint32_t t = 0; t < f.steps; ++t) pager.read_step(t, step.data());
-  const double play_s = seconds(t2);
-  const auto ps = pager.stats();
+  double play_s = 1e30;
+  pc::PagerStats ps;
+  for (int rep = 0; rep < 3; ++rep) {
+    pc::Pager pager(field);
+    const auto t2 = Clock::now();
+    for (std::uint32_t t = 0; t < f.steps; ++t) pager.read_step(t, step.data());
+    const double s = seconds(t2);
+    if (s < play_s) play_s = s, ps = pager.stats();
+  }
   // The same playback from resident pages (page reads and parsing left out): the decode of
   // one step by itself, best of 3.
   double resident_s = 1e30;
