@@ -24,6 +24,7 @@ struct CursorState {
   std::vector<std::uint8_t> left;    ///< exceptions not yet read, that one included
   std::vector<std::uint8_t> exception_width;
   std::vector<std::int32_t> k1, k2;  ///< predictive: k at the last step and the one before
+  std::vector<std::uint8_t> linear;  ///< predictive: 1 where the vertex's predictor extrapolates
   std::vector<std::uint64_t> raw;    ///< vertices stored as exact floats, increasing
 };
 

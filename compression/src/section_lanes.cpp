@@ -151,8 +151,8 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
       z = _mm256_load_si256(reinterpret_cast<const __m256i*>(patched));
     }
     if (predictive) {
-      const __m256i section = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p.blocks.section_bits.data() + v));
-      const __m256i linear = _mm256_cmpeq_epi32(read_lanes(group, section, one), one);
+      const __m256i linear = _mm256_cmpeq_epi32(
+          _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s.linear.data() + v))), one);
       const __m256i k1 = load(s.k1.data() + v), k2 = load(s.k2.data() + v);
       const __m256i k = _mm256_add_epi32(predict_lanes(linear, t, k1, k2), unzigzag_lanes(z));
       store(out + v, add_scaled(lo, k, step));

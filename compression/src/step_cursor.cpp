@@ -35,6 +35,8 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
   s.entry.resize(N);
   s.left.resize(N);
   s.exception_width.resize(N);
+  const bool predictive = p.method == PageMethod::predictive;
+  s.linear.assign(predictive ? N : 0, 0);
   const std::uint8_t* data = p.blocks.payload.data();
   parallel_for(N, 1 << 14, [&](std::size_t b, std::size_t e) {
     for (std::uint64_t v = b; v < e; ++v) {
@@ -43,6 +45,7 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
       s.slot[v] = s.entry[v] = 0;
       s.width[v] = s.left[v] = s.exception_width[v] = 0;
       if (code == BitBlocks::kRawWidth) continue;
+      if (predictive) s.linear[v] = std::uint8_t(read_bits(data, p.blocks.section_start(v), 1));
       const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
       const ValueSpan span = parse_values(data, values_start(p, v), code, count);
       s.slot[v] = std::uint32_t(span.slots - group_bit);
@@ -85,8 +88,7 @@ void cursor_step_vertex(const EncodedPage& p, std::uint32_t t, std::uint64_t v, 
   const std::uint32_t z = s.next[v] == i ? take_exception(p, v, s)
                                          : read_bits(group, s.slot[v] + std::uint64_t(i) * s.width[v], s.width[v]);
   if (predictive) {
-    const std::uint32_t predictor = read_bits(group, p.blocks.section_bits[v], 1);
-    const std::int32_t k = next_k(predictor, t, s.k1[v], s.k2[v], unzigzag(z));
+    const std::int32_t k = next_k(s.linear[v], t, s.k1[v], s.k2[v], unzigzag(z));
     s.k2[v] = s.k1[v];
     s.k1[v] = k;
     out[v] = p.lo + float(k) * p.step;
@@ -132,14 +134,30 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
     detail::CursorState& s = *m_state;
     m_page = page;
     if (predictive) {
-      // k_t needs the t prediction errors before it: one pass from each section's start, then
-      // the next step reads value index t.
       s.k1.resize(N);
       s.k2.resize(N);
-      parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
-        detail::predictive_step_range(p, t, b, e, out, s.k1.data(), s.k2.data());
-      });
-      detail::seek(p, t, s);
+      detail::seek(p, t, s);  // the next step reads value index t
+      if (t == 0) {
+        // Playback's usual start: k_0 is stored as is, one read per vertex.
+        const std::uint8_t* data = p.blocks.payload.data();
+        parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
+          for (std::uint64_t v = b; v < e; ++v) {
+            const std::uint64_t pos = p.blocks.section_start(v);
+            if (p.blocks.width(v) == BitBlocks::kRawWidth) {
+              out[v] = detail::bits_float(detail::read_bits(data, pos, 32));
+              continue;
+            }
+            const auto k = std::int32_t(detail::read_bits(data, pos + 1, p.first_width));
+            s.k1[v] = s.k2[v] = k;
+            out[v] = p.lo + float(k) * p.step;
+          }
+        });
+      } else {
+        // k_t needs the t prediction errors before it: one pass from each section's start.
+        parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
+          detail::predictive_step_range(p, t, b, e, out, s.k1.data(), s.k2.data());
+        });
+      }
       return;
     }
     // A residual value depends on nothing before it: point the cursor at step t and decode it

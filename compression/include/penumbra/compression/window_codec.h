@@ -56,7 +56,7 @@ void decode_step(const EncodedPage& page, std::uint32_t local_step, float* out);
 /// page (playback) costs O(1) per vertex for every page with bit blocks (residual or
 /// predictive). Any other order, and pages without bit blocks, decode as decode_step does.
 /// Results are bit-identical to decode_step. Holds the page it follows and, while that page
-/// has bit blocks, 8 bytes per vertex (16 on a predictive page).
+/// has bit blocks, 13 bytes per vertex (22 on a predictive page).
 class StepCursor {
 public:
   StepCursor();
