@@ -11,7 +11,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "bit_io.h"
 #include "penumbra/compression/encoded_page.h"
+#include "value_layout.h"
 
 namespace penumbra::compression::detail {
 
@@ -37,8 +39,20 @@ inline std::uint32_t value_count(const EncodedPage& p) {
 /// the first exception at or after i.
 void seek(const EncodedPage& p, std::uint32_t i, CursorState& s);
 
-/// Vertex v's exception at value index s.next[v], moving its next exception on.
-std::uint32_t take_exception(const EncodedPage& p, std::uint64_t v, CursorState& s);
+/// Vertex v's exception at value index s.next[v], moving its next exception on. Inline: the
+/// lanes call it for every exception they meet.
+inline std::uint32_t take_exception(const EncodedPage& p, std::uint64_t v, CursorState& s) {
+  const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
+  const std::uint32_t pb = position_bits(value_count(p)), step = pb + s.exception_width[v];
+  const std::uint32_t z = read_bits(group, s.entry[v] + pb, s.exception_width[v]);
+  if (--s.left[v] == 0) {
+    s.next[v] = CursorState::kNoException;
+  } else {
+    s.entry[v] += step;
+    s.next[v] = std::uint16_t(read_bits(group, s.entry[v], pb));
+  }
+  return z;
+}
 
 /// Step t of a predictive page for vertices [b, e) from the start of each section: O(t).
 /// Writes k_t and k_{t-1} into k1, k2 when given (a cursor starting at t).

@@ -68,19 +68,6 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
     if (p.blocks.width(v) == BitBlocks::kRawWidth) s.raw.push_back(v);
 }
 
-std::uint32_t take_exception(const EncodedPage& p, std::uint64_t v, CursorState& s) {
-  const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
-  const std::uint32_t pb = position_bits(value_count(p)), step = pb + s.exception_width[v];
-  const std::uint32_t z = read_bits(group, s.entry[v] + pb, s.exception_width[v]);
-  if (--s.left[v] == 0) {
-    s.next[v] = CursorState::kNoException;
-  } else {
-    s.entry[v] += step;
-    s.next[v] = std::uint16_t(read_bits(group, s.entry[v], pb));
-  }
-  return z;
-}
-
 void cursor_step_vertex(const EncodedPage& p, std::uint32_t t, std::uint64_t v, float* out, CursorState& s) {
   const bool predictive = p.method == PageMethod::predictive;
   const std::uint32_t i = predictive ? t - 1 : t;
