@@ -3,6 +3,7 @@
 //   CompressedField    open a field file, random access to any step (read_step)
 //   Pager              sequential playback with the next page prefetched
 //   encode_window / decode_step / decode_window / decode_vertex   the codec itself
+//   StepCursor         O(1) sequential steps of any page (the pager holds one)
 #pragma once
 #include "penumbra/compression/codec_params.h"
 #include "penumbra/compression/encoded_page.h"
