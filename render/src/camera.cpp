@@ -69,8 +69,9 @@ Camera::Frame Camera::frame() const {
   return f;
 }
 
-Ray Camera::primary_ray(double px, double py) const {
-  const Frame f = frame();
+Ray Camera::primary_ray(double px, double py) const { return primary_ray(frame(), px, py); }
+
+Ray Camera::primary_ray(const Frame& f, double px, double py) const {
   const double x = (2.0 * (px + 0.5) / width - 1.0) * f.half_width;
   const double y = (1.0 - 2.0 * (py + 0.5) / height) * f.half_height;
   return {eye, normalize(f.forward + f.right * x + f.up * y)};

@@ -355,6 +355,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const ScreenBasis basis = detail::screen_basis(camera);
   const std::vector<ScreenPoint> screen =
       detail::project_to_screen(basis, m_impl->mesh->points, scalars.data(), m_impl->mesh->bounds);
+  const Camera::Frame camera_frame = camera.frame();
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
   // Boundary faces binned by small screen tiles replace the per-ray BVH search: a bin of a few
@@ -371,7 +372,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
       const int x0 = static_cast<int>(ti % tiles_x) * tile, y0 = static_cast<int>(ti / tiles_x) * tile;
       for (int y = y0; y < std::min(y0 + tile, camera.height); ++y)
         for (int x = x0; x < std::min(x0 + tile, camera.width); ++x) {
-          const Ray ray = camera.primary_ray(x, y);
+          const Ray ray = camera.primary_ray(camera_frame, x, y);
           Composite acc;
           WalkStats stats;
           const RayFrame frame(ray.origin, ray.direction);

@@ -32,6 +32,9 @@ struct Camera {
   Frame frame() const;
   /// Unit-direction primary ray through the centre of pixel (px, py); py = 0 is the top row.
   Ray primary_ray(double px, double py) const;
+  /// The same with the frame computed once (frame()): a renderer's per-pixel call then skips the
+  /// frame's normalisations and tangent. Bit-identical to primary_ray(px, py).
+  Ray primary_ray(const Frame& f, double px, double py) const;
 };
 
 }  // namespace penumbra::render
