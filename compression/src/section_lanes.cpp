@@ -184,6 +184,12 @@ struct WindowChunk {
   static constexpr std::uint64_t kLanesPerChunk = kWidth;
   alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
   std::vector<std::uint32_t> z;  ///< value i of lane j at z[i * kWidth + j]
+
+  // The chunk is thread_local and the worker threads are kept for the life of the process:
+  // long windows (up to 1024 steps, 4 MiB at 1024 lanes) give their buffer back after use.
+  void release_if_large() {
+    if (z.size() * sizeof(std::uint32_t) > (std::size_t(1) << 20)) std::vector<std::uint32_t>().swap(z);
+  }
 };
 
 // Parses the 8 sections from vertex v (scalar: once per vertex-window) and unpacks their
@@ -268,6 +274,7 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
         store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load_lanes(z + j)), step), adds));
       }
   }
+  c.release_if_large();
 }
 
 __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
@@ -300,6 +307,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
       }
     }
   }
+  c.release_if_large();
 }
 
 }  // namespace detail

@@ -8,8 +8,11 @@
 #include <cstdlib>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 namespace penumbra {
 
@@ -30,8 +33,10 @@ public:
   }
 
   /// Runs `work` on the caller and on up to `helpers` workers; false (nothing run) when the
-  /// pool is busy or too small.
+  /// pool is busy or too small, or in a forked child, which has none of the workers (and whose
+  /// copy of the mutex may have been held by another parent thread at the fork).
   bool try_run(unsigned helpers, const std::function<void()>& work) {
+    if (::getpid() != m_pid) return false;
     {
       std::lock_guard<std::mutex> lock(m_mutex);
       if (m_busy || helpers > m_threads.size()) return false;
@@ -52,9 +57,16 @@ public:
   }
 
 private:
-  explicit WorkerPool(unsigned threads) {
-    for (unsigned i = 0; i < threads; ++i) m_threads.emplace_back([this] { serve(); });
-    for (auto& t : m_threads) t.detach();
+  explicit WorkerPool(unsigned threads) : m_pid(::getpid()) {
+    // Fewer workers if the system refuses threads (a container's limit): never an abort.
+    for (unsigned i = 0; i < threads; ++i) {
+      try {
+        m_threads.emplace_back([this] { serve(); });
+      } catch (const std::system_error&) {
+        break;
+      }
+      m_threads.back().detach();
+    }
   }
 
   void serve() {
@@ -81,6 +93,7 @@ private:
   unsigned m_wanted = 0, m_joined = 0, m_running = 0;
   std::uint64_t m_generation = 0;
   bool m_busy = false;
+  const pid_t m_pid;
 };
 
 }  // namespace
@@ -118,7 +131,11 @@ void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std
     work();
   } else if (!WorkerPool::instance().try_run(threads - 1, work)) {
     std::vector<std::thread> pool;
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    try {
+      for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      // No more threads to be had: the caller and those started share the chunks.
+    }
     work();
     for (auto& t : pool) t.join();
   }

@@ -9,6 +9,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "penumbra/core/thread_pool.h"
 
 TEST(ThreadPool, CoversEveryIndexOnce) {
@@ -75,4 +78,27 @@ TEST(ThreadPool, WorkersAreKeptBetweenCalls) {
       }
     });
   EXPECT_GT(most_calls_on_a_helper.load(), 1);
+}
+
+TEST(ThreadPool, AForkedChildStillRunsOnSeveralThreads) {
+  // The child of a fork has none of the parent's kept workers: its calls must start threads of
+  // their own rather than run every chunk on the caller (or wait for workers that do not exist).
+  if (penumbra::worker_count() < 2) GTEST_SKIP() << "one worker: nothing to compare";
+  penumbra::parallel_for(64, 1, [](std::size_t, std::size_t) {});  // the parent's pool exists
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::mutex m;
+    std::set<std::thread::id> ids;
+    penumbra::parallel_for(64, 1, [&](std::size_t, std::size_t) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      std::lock_guard<std::mutex> lock(m);
+      ids.insert(std::this_thread::get_id());
+    });
+    _exit(ids.size() > 1 ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the child ran every chunk on one thread";
 }
