@@ -11,6 +11,7 @@
 #include "penumbra/compression/version.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
+#include "crc32_reference.h"
 #include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
@@ -18,6 +19,7 @@
 namespace penumbra::compression {
 namespace {
 
+using testing::crc32_reference;
 using testing::SyntheticField;
 using testing::temp_path;
 
@@ -138,16 +140,6 @@ TEST(AlignedVq, WarmStartFromAStaleCodebookIsRetrainedCold) {
 std::shared_ptr<const CompressedField> write_field(const SyntheticField& f, const std::string& path, CodecParams p) {
   testing::stream_field(f, path, p, "front");
   return CompressedField::open(path);
-}
-
-// Bitwise CRC-32 (IEEE 802.3), independent of the library's table-driven one.
-std::uint32_t crc32_reference(const char* data, std::size_t size) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < size; ++i) {
-    crc ^= std::uint8_t(data[i]);
-    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
 }
 
 // Rewrites the version in a file's header (offset 8) and the header's checksum.
