@@ -122,9 +122,7 @@ TEST_F(GpuLightVolume, HomogeneousSlabIsBeerLambert) {
   const auto s = field(*mesh, [](const Vec3d&) { return 0.0; });
   std::unique_ptr<LightVolume> gpu;
   solve_both("slab", mesh, opt, s, constant_tf(1.5), {directional({1, 0, 0})}, &gpu);
-  double worst = 0;
-  for (std::size_t p = 0; p < mesh->points.size(); ++p)
-    worst = std::max(worst, std::fabs(gpu->light_rho(0)[p] - std::exp(-1.5 * mesh->points[p].x)));
+  const double worst = max_error_vs(gpu->light_rho(0), *mesh, [](const Vec3d& x) { return std::exp(-1.5 * x.x); });
   std::printf("[gpu-light] slab: max |rho_gpu - exp(-sigma x)| = %.2g\n", worst);
   EXPECT_LT(worst, 1e-5);
 }
@@ -178,9 +176,7 @@ TEST_F(GpuLightVolume, PointLightInsideCell) {
   std::unique_ptr<LightVolume> gpu;
   const Vec3d P{0.437, 0.512, 0.463};
   solve_both("point", mesh, opt, s, constant_tf(1.0), {point_light(P)}, &gpu);
-  double worst = 0;
-  for (std::size_t p = 0; p < mesh->points.size(); ++p)
-    worst = std::max(worst, std::fabs(gpu->light_rho(0)[p] - std::exp(-length(mesh->points[p] - P))));
+  const double worst = max_error_vs(gpu->light_rho(0), *mesh, [&](const Vec3d& x) { return std::exp(-length(x - P)); });
   std::printf("[gpu-light] point: max |rho_gpu - exp(-sigma r)| = %.2g\n", worst);
   EXPECT_LT(worst, 1e-4);
 }

@@ -23,11 +23,8 @@ TEST(LightAccuracy, HomogeneousSlabAlongAxisIsBeerLambert) {
   const auto r = lv.update();
   EXPECT_TRUE(r.converged);
   EXPECT_EQ(r.lost_traces, 0u);
-  double worst = 0, worst0 = 0;
-  for (std::size_t p = 0; p < mesh->points.size(); ++p) {
-    const double want = std::exp(-1.5 * mesh->points[p].x);
-    worst = std::max(worst, std::fabs(lv.light_rho(0)[p] - want));
-  }
+  const double worst = max_error_vs(lv.light_rho(0), *mesh, [](const Vec3d& x) { return std::exp(-1.5 * x.x); });
+  double worst0 = 0;
   const auto& rho0 = lv.level0_rho(0);
   const auto view = lv.level0();
   for (int i = 0; i < view.dims[0]; ++i) {
@@ -201,9 +198,7 @@ TEST(LightAccuracy, PointLightInsideCell) {
   lv.set_field(s, tf);
   lv.set_lights({point_light(P)});
   EXPECT_TRUE(lv.update().converged);
-  double worst = 0;
-  for (std::size_t p = 0; p < mesh->points.size(); ++p)
-    worst = std::max(worst, std::fabs(lv.light_rho(0)[p] - std::exp(-length(mesh->points[p] - P))));
+  const double worst = max_error_vs(lv.light_rho(0), *mesh, [&](const Vec3d& x) { return std::exp(-length(x - P)); });
   std::printf("point light: max |rho - exp(-r)| = %.3g\n", worst);
   EXPECT_LT(worst, 1e-5);
   // The reference agrees with the analytic value to rounding.

@@ -1,5 +1,6 @@
 // tests/unit/lighting/lighting_test_util.h -- meshes, fields and comparisons for the light-volume tests
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -65,6 +66,14 @@ inline std::vector<bool> used_points(const TetMesh& mesh) {
 }
 
 /// Largest |rho - reference| over the mesh vertices selected by `use` (all when empty).
+/// Largest |rho[p] - expect(x_p)| over the mesh points: a light field against a closed form.
+inline double max_error_vs(const std::vector<float>& rho, const TetMesh& mesh,
+                           const std::function<double(const Vec3d&)>& expect) {
+  double worst = 0;
+  for (std::size_t p = 0; p < mesh.points.size(); ++p) worst = std::max(worst, std::fabs(rho[p] - expect(mesh.points[p])));
+  return worst;
+}
+
 inline double max_error_vs_reference(const LightVolume& lv, std::size_t k, const std::shared_ptr<const TetMesh>& mesh,
                                      const std::vector<float>& s, const TransferFunction& tf, const Light& light,
                                      const std::function<bool(const Vec3d&)>& use = {}) {
