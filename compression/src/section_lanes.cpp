@@ -1,14 +1,13 @@
 // compression/src/section_lanes.cpp
 #include "section_lanes.h"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cstring>
 
 #include "bit_io.h"
 #include "cursor_state.h"
+#include "lane_ops.h"
 #include "penumbra/compression/window_codec.h"
 #include "value_layout.h"
 #include "vertex_section.h"
@@ -30,8 +29,6 @@ bool lanes_active() {
 }
 
 namespace {
-
-#define PNB_LANES __attribute__((target("avx2"), always_inline)) inline
 
 // Everything a lane block reads once: its codes, which lanes are special (patched or raw,
 // left to the scalar path), their plain widths (0 for special lanes, which then read only the
@@ -64,7 +61,7 @@ PNB_LANES Block load_block(const EncodedPage& p, std::uint64_t v) {
   const __m256i special = _mm256_cmpgt_epi32(codes, _mm256_set1_epi32(int(kMaxPlainWidth)));
   k.special_mask = _mm256_movemask_ps(_mm256_castsi256_ps(special));
   k.width = _mm256_andnot_si256(special, codes);
-  k.section = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p.blocks.section_bits.data() + v));
+  k.section = load(p.blocks.section_bits.data() + v);
   // The 8 vertices of a block share a group (kGroupSize is a multiple of 8).
   k.group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
   return k;
@@ -95,10 +92,6 @@ PNB_LANES __m256 add_scaled(__m256 base, __m256i q, __m256 step) {
   return _mm256_add_ps(base, _mm256_mul_ps(_mm256_cvtepi32_ps(q), step));
 }
 
-PNB_LANES __m256 load(const float* at) { return _mm256_loadu_ps(at); }
-PNB_LANES void store(float* at, __m256 x) { _mm256_storeu_ps(at, x); }
-PNB_LANES __m256i load(const std::int32_t* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
-PNB_LANES void store(std::int32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
 
 // The prediction of k_t (predictive_layout.h) for lanes whose predictor bit is set in `linear`.
 PNB_LANES __m256i predict_lanes(__m256i linear, std::uint32_t t, __m256i k1, __m256i k2) {
@@ -137,22 +130,21 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
     const std::uint32_t packed = packed_codes(p, v);
     if (!predictive && packed == 0) continue;  // sparse residuals: nothing to add
     const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
-    const __m256i width = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s.width.data() + v)));
-    const __m256i slot = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(s.slot.data() + v));
-    const __m256i next = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(s.next.data() + v)));
+    const __m256i width = widen8(s.width.data() + v);
+    const __m256i slot = load(s.slot.data() + v);
+    const __m256i next = widen16(s.next.data() + v);
     __m256i z = read_lanes(group, _mm256_add_epi32(slot, _mm256_mullo_epi32(index, width)), width);
     // Exceptions are rare (a few per vertex-window): the lanes that meet one read it alone.
     if (const int hits = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(next, index)))) {
-      _mm256_store_si256(reinterpret_cast<__m256i*>(patched), z);
+      store(patched, z);
       for (int m = hits; m; m &= m - 1) {
         const int l = __builtin_ctz(unsigned(m));
         patched[l] = take_exception(p, v + std::uint64_t(l), s);
       }
-      z = _mm256_load_si256(reinterpret_cast<const __m256i*>(patched));
+      z = load(patched);
     }
     if (predictive) {
-      const __m256i linear = _mm256_cmpeq_epi32(
-          _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(s.linear.data() + v))), one);
+      const __m256i linear = _mm256_cmpeq_epi32(widen8(s.linear.data() + v), one);
       const __m256i k1 = load(s.k1.data() + v), k2 = load(s.k2.data() + v);
       const __m256i k = _mm256_add_epi32(predict_lanes(linear, t, k1, k2), unzigzag_lanes(z));
       store(out + v, add_scaled(lo, k, step));
@@ -220,12 +212,12 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
     c.linear[j0 + l] = s.predictor == 1 ? -1 : 0;
     c.adds[j0 + l] = !is_raw && code != 0 ? -1 : 0;  // width 0 without exceptions adds nothing
   }
-  __m256i bit = _mm256_load_si256(reinterpret_cast<const __m256i*>(slot));
-  const __m256i w = _mm256_load_si256(reinterpret_cast<const __m256i*>(width));
+  __m256i bit = load(slot);
+  const __m256i w = load(width);
   std::uint32_t* z = c.z.data() + j0;
   for (std::uint32_t i = 0; i < count; ++i, z += kChunkLanes) {
     // Slots of patched lanes are up to 15 bits wide: still within one 4-byte gather.
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(z), read_lanes(group, bit, w));
+    store(z, read_lanes(group, bit, w));
     bit = _mm256_add_epi32(bit, w);
   }
   const std::uint32_t pb = position_bits(count);
@@ -237,13 +229,6 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
       if (i < count) c.z[i * kChunkLanes + j0 + std::uint32_t(l)] = read_bits(data, at + pb, spans[l].exception_width);
     }
   }
-}
-
-PNB_LANES __m256i load_lanes(const std::int32_t* at) {
-  return _mm256_load_si256(reinterpret_cast<const __m256i*>(at));
-}
-PNB_LANES __m256i load_lanes(const std::uint32_t* at) {  // inside a std::vector: unaligned
-  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at));
 }
 
 }  // namespace
@@ -270,8 +255,8 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
       for (std::uint64_t a = 0; a < count; ++a) {
         const std::uint64_t j = active[a];
         const __m256 base = load(row + j);
-        const __m256 adds = _mm256_castsi256_ps(load_lanes(c.adds + j));
-        store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load_lanes(z + j)), step), adds));
+        const __m256 adds = _mm256_castsi256_ps(load(c.adds + j));
+        store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load(z + j)), step), adds));
       }
   }
   c.release_if_large();
@@ -291,7 +276,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
     __m256i k1[kChunkLanes / kLanes], k2[kChunkLanes / kLanes];
     float* row = window + v0;
     for (std::uint64_t j = 0; j < lanes; j += kLanes) {
-      k1[j / kLanes] = k2[j / kLanes] = load_lanes(c.first + j);
+      k1[j / kLanes] = k2[j / kLanes] = load(c.first + j);
       store(row + j, add_scaled(lo, k1[j / kLanes], step));
     }
     const std::uint32_t* z = c.z.data();
@@ -300,7 +285,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
       for (std::uint64_t j = 0; j < lanes; j += kLanes) {
         __m256i& a = k1[j / kLanes];
         const __m256i next =
-            _mm256_add_epi32(predict_lanes(load_lanes(c.linear + j), t, a, k2[j / kLanes]), unzigzag_lanes(load_lanes(z + j)));
+            _mm256_add_epi32(predict_lanes(load(c.linear + j), t, a, k2[j / kLanes]), unzigzag_lanes(load(z + j)));
         k2[j / kLanes] = a;
         a = next;
         store(row + j, add_scaled(lo, next, step));

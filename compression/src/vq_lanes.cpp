@@ -1,8 +1,7 @@
 // compression/src/vq_lanes.cpp
 #include "vq_lanes.h"
 
-#include <immintrin.h>
-
+#include "lane_ops.h"
 #include "section_lanes.h"
 #include "vq_value.h"
 
@@ -10,15 +9,8 @@ namespace penumbra::compression::detail {
 
 namespace {
 
-#define PNB_LANES __attribute__((target("avx2"), always_inline)) inline
-
-PNB_LANES __m256i bytes8(const std::uint8_t* at) {
-  return _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(at)));
-}
-
 PNB_LANES __m256 means8(__m256 lo, __m256 scale, const std::uint16_t* q) {
-  const __m256i wide = _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(q)));
-  return _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(wide), scale));
+  return _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(widen16(q)), scale));
 }
 
 PNB_LANES __m256 lookup(const float* table, __m256i index) { return _mm256_i32gather_ps(table, index, 4); }
@@ -29,14 +21,14 @@ std::uint64_t lane_part(std::uint64_t count) { return lanes_active() ? count / k
 __attribute__((target("avx2"))) void add_entries_lanes(const float* table, const std::uint8_t* index,
                                                        const float* base, std::uint64_t count, float* out) {
   for (std::uint64_t i = 0; i < count; i += kLanes)
-    _mm256_storeu_ps(out + i, _mm256_add_ps(_mm256_loadu_ps(base + i), lookup(table, bytes8(index + i))));
+    store(out + i, _mm256_add_ps(load(base + i), lookup(table, widen8(index + i))));
 }
 
 __attribute__((target("avx2"))) void add_offsets_lanes(const float* table, const std::int32_t* offset,
                                                        const float* level, std::uint64_t count, float* out) {
   for (std::uint64_t i = 0; i < count; i += kLanes) {
-    const __m256i o = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(offset + i));
-    _mm256_storeu_ps(out + i, _mm256_add_ps(_mm256_loadu_ps(level + i), lookup(table, o)));
+    const __m256i o = load(offset + i);
+    store(out + i, _mm256_add_ps(load(level + i), lookup(table, o)));
   }
 }
 
@@ -45,7 +37,7 @@ __attribute__((target("avx2"))) void mean_plus_entries_lanes(float lo, float sca
                                                              std::uint64_t count, float* out) {
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   for (std::uint64_t i = 0; i < count; i += kLanes)
-    _mm256_storeu_ps(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, bytes8(i8 + i))));
+    store(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, widen8(i8 + i))));
 }
 
 __attribute__((target("avx2"))) void vq_step_values_lanes(float lo, float scale, const std::uint16_t* mean_q,
@@ -53,8 +45,8 @@ __attribute__((target("avx2"))) void vq_step_values_lanes(float lo, float scale,
                                                           const std::uint8_t* iw, std::uint64_t count, float* out) {
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   for (std::uint64_t i = 0; i < count; i += kLanes) {
-    const __m256 base = _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, bytes8(i8 + i)));
-    _mm256_storeu_ps(out + i, _mm256_add_ps(base, lookup(tw, bytes8(iw + i))));
+    const __m256 base = _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, widen8(i8 + i)));
+    store(out + i, _mm256_add_ps(base, lookup(tw, widen8(iw + i))));
   }
 }
 
@@ -65,8 +57,8 @@ __attribute__((target("avx2"))) void aligned_step_values_lanes(float lo, float s
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   const __m256i d = _mm256_set1_epi32(stride);
   for (std::uint64_t i = 0; i < count; i += kLanes) {
-    const __m256i o = _mm256_sub_epi32(_mm256_mullo_epi32(bytes8(ia + i), d), bytes8(shift + i));
-    _mm256_storeu_ps(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(table, o)));
+    const __m256i o = _mm256_sub_epi32(_mm256_mullo_epi32(widen8(ia + i), d), widen8(shift + i));
+    store(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(table, o)));
   }
 }
 

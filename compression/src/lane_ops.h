@@ -1,0 +1,28 @@
+// compression/src/lane_ops.h -- the AVX2 building blocks the lane decoders share (private):
+// 8 lanes loaded, widened or stored. Functions carry the AVX2 target themselves, so callers
+// compile without -mavx2 and choose them at run time (section_lanes.h: lanes_active).
+#pragma once
+#include <immintrin.h>
+
+#include <cstdint>
+
+#define PNB_LANES __attribute__((target("avx2"), always_inline)) inline
+
+namespace penumbra::compression::detail {
+
+/// 8 bytes or 8 half-words widened to 8 lanes.
+PNB_LANES __m256i widen8(const std::uint8_t* at) {
+  return _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(at)));
+}
+PNB_LANES __m256i widen16(const std::uint16_t* at) {
+  return _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(at)));
+}
+
+PNB_LANES __m256 load(const float* at) { return _mm256_loadu_ps(at); }
+PNB_LANES __m256i load(const std::int32_t* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
+PNB_LANES __m256i load(const std::uint32_t* at) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(at)); }
+PNB_LANES void store(float* at, __m256 x) { _mm256_storeu_ps(at, x); }
+PNB_LANES void store(std::int32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
+PNB_LANES void store(std::uint32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
+
+}  // namespace penumbra::compression::detail
