@@ -32,36 +32,7 @@ bool has_residual(const EncodedPage& p) {
   return p.method == PageMethod::vq_residual || p.method == PageMethod::vq_aligned_residual;
 }
 
-// One step of shift-aligned VQ for vertices [b, e): each vertex reads its entry at frame
-// position t + W - 1 - shift.
-void aligned_base_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
-  detail::aligned_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.ca.data() + (p.window - 1 + t),
-                              p.ia.data() + b, p.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
-}
-
-// Column t of both codebooks: the 2 x K floats a one-step decode looks up.
-void step_tables(const EncodedPage& p, std::uint32_t t, std::vector<float>& t8, std::vector<float>& tw) {
-  const std::uint32_t K = p.codebook_size, block = p.window / 8;
-  t8.resize(K);
-  tw.resize(K);
-  for (std::uint32_t e = 0; e < K; ++e) {
-    t8[e] = p.c8[std::size_t(e) * 8 + t / block];
-    tw[e] = p.cw[std::size_t(e) * p.window + t];
-  }
-}
-
-// One step of the VQ part for vertices [b, e): the hot loop of a one-step decode.
-void vq_base_range(const EncodedPage& p, const float* t8, const float* tw, std::uint64_t b, std::uint64_t e,
-                   float* out) {
-  detail::vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, tw, p.iw.data() + b, e - b,
-                         out + b);
-}
-
 constexpr std::uint64_t kNoLimit = ~0ull;
-
-void mean_plus_d8(const EncodedPage& p, const float* t8, std::uint64_t b, std::uint64_t e, float* base) {
-  detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, e - b, base);
-}
 
 // Zigzag value `i` of a patched span at bit `pos` (value_layout.h), inlined for the one-step
 // loop: the exception list is in increasing position order (checked when a page is parsed),
@@ -192,16 +163,25 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
 
 StepTables step_tables(const EncodedPage& p, std::uint32_t t) {
   StepTables tables;
-  if (is_vq(p)) compression::step_tables(p, t, tables.t8, tables.tw);
+  if (!is_vq(p)) return tables;
+  const std::uint32_t K = p.codebook_size, block = p.window / 8;
+  tables.t8.resize(K);
+  tables.tw.resize(K);
+  for (std::uint32_t e = 0; e < K; ++e) {
+    tables.t8[e] = p.c8[std::size_t(e) * 8 + t / block];
+    tables.tw[e] = p.cw[std::size_t(e) * p.window + t];
+  }
   return tables;
 }
 
 void vq_base_step(const EncodedPage& p, std::uint32_t t, const StepTables& tables, std::uint64_t b, std::uint64_t e,
                   float* out) {
   if (is_vq(p))
-    vq_base_range(p, tables.t8.data(), tables.tw.data(), b, e, out);
-  else
-    aligned_base_range(p, t, b, e, out);
+    vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, tables.t8.data(), p.i8.data() + b, tables.tw.data(),
+                   p.iw.data() + b, e - b, out + b);
+  else  // each vertex reads its aligned entry at frame position t + W - 1 - shift
+    aligned_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.ca.data() + (p.window - 1 + t),
+                        p.ia.data() + b, p.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
 }
 
 }  // namespace detail
@@ -235,11 +215,10 @@ void decode_window(const EncodedPage& p, float* out) {
   if (is_vq(p)) {
     // Both codebook columns of every step, computed once: 2 x K floats per step.
     tables.resize(std::size_t(n) * 2 * p.codebook_size);
-    std::vector<float> t8, tw;
     for (std::uint32_t t = 0; t < n; ++t) {
-      step_tables(p, t, t8, tw);
-      std::copy(t8.begin(), t8.end(), tables.begin() + std::size_t(t) * 2 * p.codebook_size);
-      std::copy(tw.begin(), tw.end(), tables.begin() + (std::size_t(t) * 2 + 1) * p.codebook_size);
+      const detail::StepTables column = detail::step_tables(p, t);
+      std::copy(column.t8.begin(), column.t8.end(), tables.begin() + std::size_t(t) * 2 * p.codebook_size);
+      std::copy(column.tw.begin(), column.tw.end(), tables.begin() + (std::size_t(t) * 2 + 1) * p.codebook_size);
     }
   }
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
@@ -251,7 +230,8 @@ void decode_window(const EncodedPage& p, float* out) {
       const std::uint32_t block = p.window / 8;
       for (std::uint32_t t = 0; t < n; ++t) {
         const float* t8 = tables.data() + std::size_t(t) * 2 * p.codebook_size;
-        if (t % block == 0) mean_plus_d8(p, t8, b, e, base.data());
+        if (t % block == 0)
+          detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, e - b, base.data());
         detail::add_entries(t8 + p.codebook_size, p.iw.data() + b, base.data(), e - b, out + std::uint64_t(t) * N + b);
       }
     }
