@@ -124,27 +124,10 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
       s.k1.resize(N);
       s.k2.resize(N);
       detail::seek(p, t, s);  // the next step reads value index t
-      if (t == 0) {
-        // Playback's usual start: k_0 is stored as is, one read per vertex.
-        const std::uint8_t* data = p.blocks.payload.data();
-        parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
-          for (std::uint64_t v = b; v < e; ++v) {
-            const std::uint64_t pos = p.blocks.section_start(v);
-            if (p.blocks.width(v) == BitBlocks::kRawWidth) {
-              out[v] = detail::bits_float(detail::read_bits(data, pos, 32));
-              continue;
-            }
-            const auto k = std::int32_t(detail::read_bits(data, pos + 1, p.first_width));
-            s.k1[v] = s.k2[v] = k;
-            out[v] = p.lo + float(k) * p.step;
-          }
-        });
-      } else {
-        // k_t needs the t prediction errors before it: one pass from each section's start.
-        parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
-          detail::predictive_step_range(p, t, b, e, out, s.k1.data(), s.k2.data());
-        });
-      }
+      // k_t needs the t prediction errors before it: one pass from each section's start.
+      parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
+        detail::predictive_step_range(p, t, b, e, out, s.k1.data(), s.k2.data());
+      });
       return;
     }
     // A residual value depends on nothing before it: point the cursor at step t and decode it

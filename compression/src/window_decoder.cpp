@@ -148,11 +148,19 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
   scratch.resize(p.step_count);
   VertexSection s;
   for (std::uint64_t v = b; v < e; ++v) {
-    parse_vertex(p, data, p.blocks.section_start(v), p.blocks.width(v), kNoLimit, s);
-    if (s.code == BitBlocks::kRawWidth) {
-      out[v] = bits_float(read_bits(data, s.start + 32ull * t, 32));
+    const std::uint64_t pos = p.blocks.section_start(v);
+    if (p.blocks.width(v) == BitBlocks::kRawWidth) {
+      out[v] = bits_float(read_bits(data, pos + 32ull * t, 32));
       continue;
     }
+    if (t == 0) {
+      // k_0 is stored as is (after the predictor bit): no parse (playback's usual start).
+      const auto k = std::int32_t(read_bits(data, pos + 1, p.first_width));
+      out[v] = p.lo + float(k) * p.step;
+      if (k1) k1[v] = k2[v] = k;
+      continue;
+    }
+    parse_vertex(p, data, pos, p.blocks.width(v), kNoLimit, s);
     std::int32_t previous;
     const std::int32_t k = compression::predictive_k(p, data, s, t, scratch.data(), &previous);
     out[v] = p.lo + float(k) * p.step;
