@@ -52,6 +52,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
     out << "penumbra-replay: stored run '" << path << "' (" << run->mesh().point_count() << " points, "
         << run->fields().size() << " field(s), " << n << " step(s)), replaying steps " << first << ".." << last - 1
         << "\n";
+  run->start_at(first);  // the first pages load while the context and the mesh are set up
   pnb_context ctx = nullptr;
   if (pnb_create(config.c_str(), &ctx) != PNB_OK) {
     err << "penumbra-replay: " << pnb_last_error(nullptr) << "\n";

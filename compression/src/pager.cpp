@@ -32,8 +32,7 @@ Pager::Pager(std::shared_ptr<const CompressedField> field, PagerOptions options)
   if (m_options.prefetch) {
     m_thread = std::thread([this] { prefetch_loop(); });
     // Playback usually starts at step 0: have its page on the way before the first read.
-    std::lock_guard<std::mutex> lock(m_mutex);
-    if (m_field->page_count() > 0) request_prefetch_locked(0);
+    if (m_field->page_count() > 0) start_at(0);
   }
 }
 
@@ -104,10 +103,61 @@ void Pager::prefetch_loop() {
       ++m_stats.loads;
       ++m_stats.prefetched;
       // Keep it only if playback still wants it (current or the one after).
-      if (page == m_current || page == m_current + 1 || m_current == kNone) insert_locked(page, std::move(data));
+      if (page == m_current || page == m_current + 1 || (m_current == kNone && page == m_start))
+        insert_locked(page, std::move(data));
     }
     m_loaded.notify_all();
   }
+}
+
+std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator Pager::make_resident_locked(
+    std::unique_lock<std::mutex>& lock, std::size_t page) {
+  auto it = m_resident.find(page);
+  if (it != m_resident.end()) return it;
+  if (m_loading == page) {
+    m_loaded.wait(lock, [&] { return m_loading != page; });
+    it = m_resident.find(page);
+    if (it != m_resident.end()) return it;
+  }
+  lock.unlock();
+  auto loaded = m_field->load_page(page);  // throws naming the page if it is bad
+  lock.lock();
+  ++m_stats.loads;
+  m_current = page;
+  evict_locked(page, page + 1);
+  insert_locked(page, std::move(loaded));
+  return m_resident.find(page);
+}
+
+bool Pager::resident(std::uint64_t step) const {
+  const std::size_t page = m_field->page_of_step(step);
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_resident.count(page) > 0;
+}
+
+void Pager::start_at(std::uint64_t step) {
+  const std::size_t page = m_field->page_of_step(step);
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (m_current != page && !m_resident.count(page)) {
+    // Playback moves there: what it held is no longer wanted.
+    m_current = kNone;
+    evict_locked(page, page + 1);
+  }
+  m_start = page;
+  request_prefetch_locked(page);
+}
+
+void Pager::prepare(std::uint64_t step) {
+  const std::size_t page = m_field->page_of_step(step);
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_lock<std::mutex> lock(m_mutex);
+  make_resident_locked(lock, page);
+  if (m_current != page) {
+    m_current = page;
+    evict_locked(page, page + 1);
+  }
+  request_prefetch_locked(page + 1);
+  m_stats.prepare_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void Pager::read_step(std::uint64_t step, float* out) {
@@ -121,20 +171,7 @@ void Pager::read_step(std::uint64_t step, float* out) {
     if (it == m_resident.end()) {
       ++m_stats.stalls;
       const auto start = std::chrono::steady_clock::now();
-      if (m_loading == page) {
-        m_loaded.wait(lock, [&] { return m_loading != page; });
-        it = m_resident.find(page);
-      }
-      if (it == m_resident.end()) {
-        lock.unlock();
-        auto loaded = m_field->load_page(page);  // throws naming the page if it is bad
-        lock.lock();
-        ++m_stats.loads;
-        m_current = page;
-        evict_locked(page, page + 1);
-        insert_locked(page, std::move(loaded));
-        it = m_resident.find(page);
-      }
+      it = make_resident_locked(lock, page);
       m_stats.stall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     data = it->second;

@@ -85,19 +85,37 @@ std::size_t StoredRun::step_count() const { return m_impl->steps.size(); }
 double StoredRun::time(std::size_t step) const { return m_impl->steps.at(step).second; }
 std::int64_t StoredRun::cycle(std::size_t step) const { return m_impl->steps.at(step).first; }
 
+namespace {
+
+// The field's own step at the run's step `step`: a step whose values were refused (NaN) is
+// missing from that field's file. -1 if it has none.
+std::int64_t own_step(const compression::CompressedField& file, double time) {
+  const auto& times = file.times();
+  const auto pos = std::find(times.begin(), times.end(), time);
+  return pos == times.end() ? -1 : static_cast<std::int64_t>(pos - times.begin());
+}
+
+}  // namespace
+
+void StoredRun::start_at(std::size_t step) {
+  if (step >= step_count()) return;
+  for (auto& [name, f] : m_impl->fields) {
+    const std::int64_t own = own_step(*f.file, time(step));
+    if (own >= 0) f.pager->start_at(static_cast<std::uint64_t>(own));
+  }
+}
+
 void StoredRun::read(const std::string& field, std::size_t step, std::vector<float>& out) {
   auto it = m_impl->fields.find(field);
   if (it == m_impl->fields.end()) throw Error(ErrorCode::invalid_argument, "stored run: no field '" + field + "'");
   require(step < step_count(), "stored run: step " + std::to_string(step) + " is beyond the " +
                                    std::to_string(step_count()) + " stored steps");
-  // The field's own step at this time: a step whose values were refused (NaN) is missing there.
-  const auto& times = it->second.file->times();
-  const double t = time(step);
-  const auto pos = std::find(times.begin(), times.end(), t);
-  if (pos == times.end())
-    throw Error(ErrorCode::invalid_argument, "stored run: field '" + field + "' has no values at time " + std::to_string(t));
+  const std::int64_t own = own_step(*it->second.file, time(step));
+  if (own < 0)
+    throw Error(ErrorCode::invalid_argument, "stored run: field '" + field + "' has no values at time " +
+                                                 std::to_string(time(step)));
   out.resize(m_impl->view.point_count());
-  it->second.pager->read_step(static_cast<std::uint64_t>(pos - times.begin()), out.data());
+  it->second.pager->read_step(static_cast<std::uint64_t>(own), out.data());
 }
 
 }  // namespace penumbra::insitu

@@ -69,6 +69,46 @@ TEST(Pager, SequentialPlaybackDoesNotStall) {
   EXPECT_EQ(s.prefetched, 4u);
 }
 
+TEST(Pager, PlaybackAfterPrepareNeverStallsFromAnyStartingStep) {
+  const auto f = testing::smooth_blobs(3000, 64);
+  const auto field = make_field(f, temp_path("p.pnbf"), params(16));
+  std::vector<float> out(3000), ref(3000);
+  for (const std::uint64_t first : {0u, 37u}) {
+    Pager pager(field);
+    pager.prepare(first);  // no sleep: prepare is what makes the first page resident
+    for (std::uint64_t t = first; t < 64; ++t) {
+      pager.read_step(t, out.data());
+      field->read_step(t, ref.data());
+      ASSERT_EQ(0, std::memcmp(out.data(), ref.data(), out.size() * 4)) << t;
+      // The time a renderer takes per frame, so that the next page's prefetch can finish.
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const auto s = pager.stats();
+    EXPECT_EQ(s.stalls, 0u) << "from step " << first;
+    // Each page once (from step 37 the constructor's load of page 0 may or may not have begun).
+    if (first == 0) EXPECT_EQ(s.loads, 4u);
+    EXPECT_GT(s.prepare_seconds, 0.0);
+  }
+}
+
+TEST(Pager, StartAtLoadsThatPageInTheBackground) {
+  const auto f = testing::smooth_blobs(3000, 64);
+  const auto field = make_field(f, temp_path("a.pnbf"), params(16));
+  Pager pager(field, {});
+  pager.start_at(50);  // page 3; the constructor's load of page 0 is no longer wanted
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!pager.resident(50) && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  std::vector<float> out(3000), ref(3000);
+  pager.read_step(50, out.data());
+  field->read_step(50, ref.data());
+  EXPECT_EQ(0, std::memcmp(out.data(), ref.data(), out.size() * 4));
+  EXPECT_EQ(pager.stats().stalls, 0u);
+  EXPECT_FALSE(pager.resident(0));  // playback moved: page 0 is not kept
+  EXPECT_THROW(pager.start_at(64), Error);
+  EXPECT_THROW(pager.prepare(64), Error);
+}
+
 TEST(Pager, MemoryCapLimitsResidencyAndTooSmallACapIsRejected) {
   const auto f = testing::smooth_blobs(3000, 48);
   const auto field = make_field(f, temp_path("c.pnbf"), params(16));

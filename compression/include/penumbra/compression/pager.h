@@ -26,6 +26,7 @@ struct PagerStats {
   std::uint64_t reads = 0;          ///< read_step calls
   std::uint64_t stalls = 0;         ///< reads that waited for a page to come from disk
   double stall_seconds = 0;         ///< time spent in those waits
+  double prepare_seconds = 0;       ///< time prepare() waited (set-up before playback, not a stall)
   std::uint64_t loads = 0;          ///< pages loaded (either thread)
   std::uint64_t prefetched = 0;     ///< pages loaded ahead by the background thread
   std::uint64_t resident_bytes = 0, peak_resident_bytes = 0;
@@ -41,6 +42,16 @@ public:
   Pager(const Pager&) = delete;
   Pager& operator=(const Pager&) = delete;
 
+  /// Starts loading the page of `step` in the background, for playback that will begin there
+  /// (the constructor does this for step 0). Returns at once; a bad page is reported by the
+  /// read that needs it.
+  void start_at(std::uint64_t step);
+  /// Returns once the page of `step` is resident (loading it here if no load is under way), so
+  /// that playback from `step` does not wait. Its time is set-up (PagerStats::prepare_seconds),
+  /// not a stall. Throws penumbra::Error naming the page if it is bad.
+  void prepare(std::uint64_t step);
+  /// Whether the page of `step` is loaded (a read of it would not wait).
+  bool resident(std::uint64_t step) const;
   /// Decodes global step `step` for all vertices into out[vertex_count].
   void read_step(std::uint64_t step, float* out);
   PagerStats stats() const;
@@ -49,6 +60,9 @@ public:
 private:
   void prefetch_loop();
   void request_prefetch_locked(std::size_t page);
+  /// Makes `page` resident and current, waiting for an in-flight load or loading it here.
+  std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator make_resident_locked(
+      std::unique_lock<std::mutex>& lock, std::size_t page);
   void evict_locked(std::size_t keep_a, std::size_t keep_b);
   void insert_locked(std::size_t page, std::shared_ptr<const EncodedPage> data);
 
@@ -59,6 +73,7 @@ private:
   std::map<std::size_t, std::shared_ptr<const EncodedPage>> m_resident;
   static constexpr std::size_t kNone = ~std::size_t(0);
   std::size_t m_request = kNone, m_loading = kNone, m_current = kNone;
+  std::size_t m_start = 0;  ///< page of the last start_at(), kept while no page is current
   bool m_stop = false;
   PagerStats m_stats;
   StepCursor m_cursor;  ///< O(1) sequential steps of predictive pages

@@ -31,6 +31,9 @@ public:
   /// Simulation time and cycle of each step.
   double time(std::size_t step) const;
   std::int64_t cycle(std::size_t step) const;
+  /// Starts loading every field's page that holds `step`, in the background, for playback that
+  /// begins there: a caller that sets up its renderer meanwhile does not wait at its first read.
+  void start_at(std::size_t step);
   /// Decodes `field` at `step` for every point into `out` (resized). Sequential reads are
   /// paged: the next window is prefetched while the current one is read.
   void read(const std::string& field, std::size_t step, std::vector<float>& out);
