@@ -3,7 +3,7 @@
 //
 // Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
-//          [--pyramid opacity|extinction|step_opacity]
+//          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
 // grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets).
@@ -14,13 +14,15 @@
 //   ao-points:  the cone transparency towards the eye at every mesh point (image-space evaluation
 //               per point; per-sample evaluation needs the renderer to call it),
 //   ao-object:  the same, precomputed on a pre-illumination volume and sampled at the points,
-//   ao-image:   the same cones traced at every segment end of every ray (scenes up to 200k tets),
+//   ao-image:   the same cones traced at every segment end of every ray (scenes up to 200k tets;
+//               --image-space off leaves it out: it costs seconds per frame),
 //   ao+shadow:  ao-object times a 2-degree cone towards a directional light,
 // and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones.
 // Hard shadows, against the image lit by the exact single-ray transmittance to the light:
 //   shadow-cone:          a 2-degree cone (splits 1) as long as the bounds' diagonal (default
 //                         gap 3 sigma0: with no gap the blur around the point darkens it more),
-//   shadow-light-volume:  the two-level light volume (level 0 at 128) solved to convergence.
+//   shadow-light-volume:  the two-level light volume (level 0 at 128) solved to convergence,
+//   shadow-light-volume-level0:  its level 0 alone, interpolated to the points.
 // ms_per_frame includes recomputing L (AO follows the viewer), not the pyramid (per transfer
 // function, reported as pyramid_build_ms). Errors are over pixels the mesh covers.
 //
@@ -203,6 +205,9 @@ int run(int argc, char** argv) {
                              : pyramid_name == "extinction" ? pr::PyramidQuantity::extinction
                                                             : pr::PyramidQuantity::step_opacity;
   const std::string gpu_option = pb::option(argc, argv, "gpu", "on");
+  const std::string image_space = pb::option(argc, argv, "image-space", "on");
+  penumbra::require(image_space == "on" || image_space == "off",
+                    "pnb_bench_occlusion: --image-space " + image_space + "; expected on or off");
   penumbra::require(gpu_option == "on" || gpu_option == "off", "pnb_bench_occlusion: --gpu " + gpu_option + "; expected on or off");
   penumbra::require(weight_name == "mean" || weight_name == "thesis",
                     "pnb_bench_occlusion: --weight " + weight_name + "; expected mean or thesis");
@@ -359,7 +364,7 @@ int run(int argc, char** argv) {
     cpu_result[key("ao-object", splits)] = {field, image};
     // Image space: the cones traced at every segment end of every ray (a cone per tet step, so
     // only on the smaller scenes).
-    if (mesh.tets.size() <= 200000) {
+    if (image_space == "on" && mesh.tets.size() <= 200000) {
       t = timed(
           [&] {
             pr::RenderOptions o = lit;
@@ -411,6 +416,17 @@ int run(int argc, char** argv) {
     return render_with(volume.light_rgb());
   }, image);
   emit("shadow-light-volume", 0, t, image, with_mc ? &hard_image : nullptr);
+  // Level 0 alone (the upwind grid, interpolated to the points): the light volume without the
+  // per-vertex trace-backs of level 1.
+  lv_options.mode = pr::LightSolveMode::level0_only;
+  pr::LightVolume coarse(s.mesh, lv_options);
+  coarse.set_lights({light});
+  t = timed([&] {
+    coarse.set_field(s.scalars, s.tf);
+    coarse.update();
+    return render_with(coarse.light_rgb());
+  }, image);
+  emit("shadow-light-volume-level0", 0, t, image, with_mc ? &hard_image : nullptr);
 
   // The GPU path: the same modes with the cones traced and the frame rendered on the device.
   const std::shared_ptr<pr::GpuDevice> device =

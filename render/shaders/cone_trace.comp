@@ -52,6 +52,8 @@ uniform float u_gap;
 uniform float u_length;
 uniform vec3 u_dir3[3];  // sub-cone axes in the cone frame (x, y across, z along)
 uniform vec3 u_dir7[7];
+uniform float u_lateral3;  // ConeTracer::lateral_variance_ratio(3) and (7)
+uniform float u_lateral7;
 
 const float kOpaqueDepth = 40.0;
 
@@ -144,11 +146,28 @@ float trace(vec3 apex, vec3 axis, float max_length) {
     }
     if (last || all_opaque) break;
   }
-  // Cosine-weighted mean over the final cones.
+  // Variance within each final cone from the spread between them (occlusion.h, "Lateral variance").
+  float within = 0.0;
+  if (cones > 1) {
+    // Opaque depths enter clamped, as in cone_tracer.cpp (kSaturatedDepth).
+    float mean = 0.0, spread = 0.0;
+    for (int i = 0; i < cones; ++i) mean += min(depth[i], 10.0);
+    mean /= float(cones);
+    for (int i = 0; i < cones; ++i) spread += (min(depth[i], 10.0) - mean) * (min(depth[i], 10.0) - mean);
+    within = (cones == 3 ? u_lateral3 : u_lateral7) * spread / float(cones);
+  }
+  // Cosine-weighted mean over the final cones, each the mean of exp(-D) over a gamma-distributed D.
   float sum = 0.0, wsum = 0.0;
   for (int i = 0; i < cones; ++i) {
     float c = cones == 1 ? 1.0 : dot(dirs[i], w);
-    sum += c * exp(-depth[i]);
+    float factor = 1.0;
+    if (within > 0.0 && depth[i] > 0.0) {
+      // ln(1 + x) / x. GLSL's log() near 1 is only good to an absolute 2^-21, so small x take
+      // the series (its first left-out term, x^5 / 6, is below 4e-9 for x < 0.03).
+      float x = within / depth[i];
+      factor = x < 0.03 ? 1.0 - x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * 0.2))) : log(1.0 + x) / x;
+    }
+    sum += c * exp(-depth[i] * factor);
     wsum += c;
   }
   return sum / wsum;

@@ -22,6 +22,9 @@ constexpr double kRadius7 = 1.0 / 3.0;
 constexpr double kOffset7 = 2.0 / 3.0;
 // Depth beyond which exp(-depth) is below float resolution of any shading result.
 constexpr double kOpaqueDepth = 40.0;
+// Depth at which a (sub-)cone counts as opaque for the lateral variance: exp(-10) = 4.5e-5, far
+// below one level of an 8-bit image.
+constexpr double kSaturatedDepth = 10.0;
 
 double section_weight(SectionWeight model, double r, double sigma, double alpha) {
   if (model == SectionWeight::mean) return alpha;
@@ -30,6 +33,14 @@ double section_weight(SectionWeight model, double r, double sigma, double alpha)
   if (x < 1e-6) return alpha * 4.0 / kPi;
   const double p = std::erf(x);
   return alpha * (p * p * 2.0 * kPi * sigma * sigma) / (kPi * r * r);
+}
+
+// ln(1 + x) / x for x = V / mu: exp(-mu times it) is the mean of exp(-D) over a gamma-distributed
+// D with mean mu and variance V. 1 (plain exp(-mu)) when there is no variance.
+double gamma_depth_factor(double variance, double mean) {
+  if (!(variance > 0) || !(mean > 0)) return 1.0;
+  const double x = variance / mean;
+  return std::log1p(x) / x;
 }
 
 double sub_tan(int cones, double tan_theta) {
@@ -159,14 +170,31 @@ double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis, double ma
     }
     if (last || all_opaque) break;
   }
+  // Variance within each final cone from the spread between them (occlusion.h, "Lateral variance").
+  double within = 0;
+  if (cones > 1) {
+    // Depths beyond kSaturatedDepth let nothing through whatever their value, so they enter the
+    // spread clamped: how deep an opaque sub-cone's depth runs says nothing about its neighbours.
+    double mean = 0, spread = 0, clamped[7];
+    for (int i = 0; i < cones; ++i) mean += clamped[i] = std::min(depth[i], kSaturatedDepth);
+    mean /= cones;
+    for (int i = 0; i < cones; ++i) spread += (clamped[i] - mean) * (clamped[i] - mean);
+    within = lateral_variance_ratio(cones) * spread / cones;
+  }
   // Cosine-weighted mean over the final cones (thesis Algorithm 4, line 27).
   double sum = 0, wsum = 0;
   for (int i = 0; i < cones; ++i) {
     const double c = cones == 1 ? 1.0 : dot(dirs[i], w);
-    sum += c * std::exp(-depth[i]);
+    sum += c * std::exp(-depth[i] * gamma_depth_factor(within, depth[i]));
     wsum += c;
   }
   return sum / wsum;
+}
+
+double ConeTracer::lateral_variance_ratio(int cones) const {
+  if (!m_options.lateral_variance || cones == 1) return 0.0;
+  return cones == 3 ? kRadius3 * kRadius3 / (2.0 * kOffset3 * kOffset3)
+                    : kRadius7 * kRadius7 / 4.0 / (6.0 / 7.0 * kOffset7 * kOffset7 / 2.0);
 }
 
 }  // namespace penumbra::render

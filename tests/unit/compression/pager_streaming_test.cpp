@@ -77,11 +77,14 @@ TEST(Pager, PlaybackAfterPrepareNeverStallsFromAnyStartingStep) {
     Pager pager(field);
     pager.prepare(first);  // no sleep: prepare is what makes the first page resident
     for (std::uint64_t t = first; t < 64; ++t) {
+      // A renderer's frame is where the next page's prefetch finishes; on a loaded machine that
+      // takes a while, so give it up to 10 s (the reads must still find every page resident).
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (!pager.resident(t) && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
       pager.read_step(t, out.data());
       field->read_step(t, ref.data());
       ASSERT_EQ(0, std::memcmp(out.data(), ref.data(), out.size() * 4)) << t;
-      // The time a renderer takes per frame, so that the next page's prefetch can finish.
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     const auto s = pager.stats();
     EXPECT_EQ(s.stalls, 0u) << "from step " << first;

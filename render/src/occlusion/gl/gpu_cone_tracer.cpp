@@ -234,6 +234,8 @@ void GpuConeTracer::Impl::set_cone_uniforms(const GlApi& gl, const ConeTarget& t
   gl.ProgramUniform1i(p, uniform(gl, "u_schedule_count"), schedule_count);
   gl.ProgramUniform1f(p, uniform(gl, "u_gap"), static_cast<float>(host->gap()));
   gl.ProgramUniform1f(p, uniform(gl, "u_length"), static_cast<float>(host->length()));
+  gl.ProgramUniform1f(p, uniform(gl, "u_lateral3"), static_cast<float>(host->lateral_variance_ratio(3)));
+  gl.ProgramUniform1f(p, uniform(gl, "u_lateral7"), static_cast<float>(host->lateral_variance_ratio(7)));
   // Sub-cone axes as ConeTracer's constructor makes them (thesis fig. 3.5 packings).
   const double tan_theta = std::tan(host->options().aperture_deg * kPi / 180.0);
   const double radius3 = 1.0 / (1.0 + 2.0 / std::sqrt(3.0)), offset3 = 1.0 - radius3, offset7 = 2.0 / 3.0;
