@@ -33,6 +33,37 @@ TEST(ConeOccluders, ThinOpaquePlateIsNotBlurredAwayBySplits) {
   }
 }
 
+TEST(ConeOccluders, LateralVarianceBringsAHalfSpaceEdgeCloserToExact) {
+  // A medium filling x > 0, the cone's apex on its boundary plane: every ray with a positive x
+  // component crosses depth tau (L - h0), every other ray nothing, so the cosine-weighted
+  // transmittance is exactly (1 + exp(-tau (L - h0))) / 2. exp(-mean depth) per sub-cone is darker
+  // (the sub-cone on the edge averages lit and shadowed rays); the lateral variance, taken from the
+  // spread between the sub-cones, must bring every split count and aperture closer, and never
+  // past the exact value (the linear model understates a step's variance).
+  const double tau = 2.0;
+  const ExtinctionPyramid p(grid(97, -1, 1, [&](const Vec3d& x) { return x.x > 0 ? tau : x.x == 0 ? tau / 2 : 0.0; }));
+  for (int splits : {3, 7}) {
+    for (double beta : {15.0, 30.0}) {
+      ConeOptions o = ConeOptions::occlusion(beta, splits);
+      o.length = 1.3;
+      const ConeTracer corrected(p, o);
+      o.lateral_variance = false;
+      const ConeTracer plain(p, o);
+      const double exact = 0.5 * (1.0 + std::exp(-tau * (o.length - corrected.gap())));
+      const double with = corrected.transmittance({0, 0, -0.5}, {0, 0, 1});
+      const double without = plain.transmittance({0, 0, -0.5}, {0, 0, 1});
+      std::printf("half space splits %d beta %.0f: exact %.4f plain %.4f lateral %.4f\n", splits, beta, exact, without, with);
+      EXPECT_LT(std::fabs(with - exact), std::fabs(without - exact)) << splits << " " << beta;
+      EXPECT_LE(with, exact + 1e-3) << splits << " " << beta;
+    }
+  }
+  // One cone has no spread to estimate from: unchanged.
+  ConeOptions one = ConeOptions::occlusion(20.0, 1);
+  const double a = ConeTracer(p, one).transmittance({0, 0, -0.5}, {0, 0, 1});
+  one.lateral_variance = false;
+  EXPECT_EQ(a, ConeTracer(p, one).transmittance({0, 0, -0.5}, {0, 0, 1}));
+}
+
 TEST(ConeOccluders, OpaqueBallOnTheAxisIsNeverBrighterThanAnalytic) {
   // Ball of radius 0.3 at distance 0.8: gamma = asin(0.375) = 22.0 deg; exact cosine-weighted
   // fraction 1 - sin^2 gamma / sin^2 beta. The cone model averages extinction over each (sub-)cone

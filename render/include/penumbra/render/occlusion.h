@@ -60,8 +60,11 @@
 // between exp(-mu) (V = 0) and 1, monotone, never above 1. Measured on bench/occlusion (20 deg
 // cones, image mean Delta E against Monte Carlo), hexblock-hole: 2.68 -> 2.18 (3 cones, per
 // point), 2.53 -> 2.03 (3, object space), 2.32 -> 2.00 (7), 2.16 -> 1.84 (7, object space);
-// plate-shadow: 0.79 -> 0.63 (3), 0.70 -> 0.61 (7). The ratios are not fitted: a larger one
-// (2.5x) lowers hexblock-hole further but overshoots on plate-shadow with 7 cones.
+// plate-shadow: 0.79 -> 0.62 (3), 0.70 -> 0.58 (7). The ratios are not fitted: a larger one
+// (2.5x) lowers hexblock-hole further but overshoots on plate-shadow with 7 cones. Depths enter
+// the spread clamped at 10 (exp(-10) lets nothing visible through): otherwise how far an opaque
+// sub-cone's depth runs past that would brighten its neighbours, and an opaque ball on the axis
+// would read darker at 60 deg than at 45.
 //
 // The axis integral runs over [h0, L] (the same interval as the Monte Carlo reference, eq. 3-7);
 // the thesis's extra half Gaussian before the first sample (eq. 3-16, first term) is left out for
