@@ -194,6 +194,9 @@ int run(int argc, char** argv) {
   const int grid_res = std::stoi(pb::option(argc, argv, "grid", "128"));
   const int preillum_res = std::stoi(pb::option(argc, argv, "preillum", "64"));
   const std::size_t mc_max_points = std::stoul(pb::option(argc, argv, "mc-max-points", "60000"));
+  // Monte Carlo rays per cone double until two successive estimates differ by less than this.
+  const double mc_tolerance = std::stod(pb::option(argc, argv, "mc-tolerance", "5e-3"));
+  const int mc_max_rays = std::stoi(pb::option(argc, argv, "mc-max-rays", "1024"));
   const int hex_n = std::stoi(pb::option(argc, argv, "hex-n", "24"));
   const double alpha = std::stod(pb::option(argc, argv, "alpha", "1"));
   const std::string weight_name = pb::option(argc, argv, "weight", "mean");
@@ -268,8 +271,9 @@ int run(int argc, char** argv) {
         for (std::size_t p = p0; p < p1; ++p) {
           const Vec3d& x = mesh.points[p];
           const pr::MonteCarloResult r =
-              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, shadow1.gap(), shadow1.length(), 5e-3, 32, 1024, p)
-                     : mc.transmittance(x, eye - x, kAperture, ao3.gap(), ao3.length(), 5e-3, 32, 1024, p);
+              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, shadow1.gap(), shadow1.length(), mc_tolerance,
+                                        32, mc_max_rays, p)
+                     : mc.transmittance(x, eye - x, kAperture, ao3.gap(), ao3.length(), mc_tolerance, 32, mc_max_rays, p);
           out[p] = static_cast<float>(r.transmittance);
           rays[p] += r.rays;
         }

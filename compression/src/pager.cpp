@@ -119,6 +119,7 @@ std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator Pager::make_
     it = m_resident.find(page);
     if (it != m_resident.end()) return it;
   }
+  if (m_request == page) m_request = kNone;  // loaded here: the prefetcher must not load it again
   lock.unlock();
   auto loaded = m_field->load_page(page);  // throws naming the page if it is bad
   lock.lock();

@@ -1,6 +1,8 @@
 // render/src/shade_context.cpp -- per-tet normals and the light field for shaded frames
 #include "shade_context.h"
 
+#include <cmath>
+
 #include "penumbra/core/thread_pool.h"
 
 namespace penumbra::render::detail {
@@ -13,6 +15,8 @@ ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vec
   const double dl = length(shading.light_direction);
   sc.headlight = !(dl > 0);
   if (!sc.headlight) sc.to_light = shading.light_direction / dl;
+  if (shading.shininess >= 0 && shading.shininess <= 1024 && shading.shininess == std::floor(shading.shininess))
+    sc.whole_shininess = static_cast<int>(shading.shininess);
   if (shading.model == LightingModel::none) return sc;
   // The scalar is linear in a tet: its gradient is constant there, the sum over the faces'
   // area vectors weighted by the opposite value differences (divided by 6 x volume, which only
