@@ -80,21 +80,37 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
 
 double scatter_sweep(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
                      std::vector<float>& current, std::vector<float>& snapshot) {
+  ScatterSweep sweep;
+  sweep.snapshot.swap(snapshot);
+  scatter_sweep_part(plan, pre, sigma_s, current, sweep, kScatterChunks);
+  snapshot.swap(sweep.snapshot);
+  return sweep.residual;
+}
+
+bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                        std::vector<float>& current, ScatterSweep& sweep, std::size_t chunks) {
   // Four channels (the fourth is padding) in one vector: a neighbour costs one load and one
   // multiply-add. Sums in float: a dozen positive terms, relative error ~1e-7.
   typedef float Colour __attribute__((vector_size(16)));
   constexpr std::size_t S = kPlannedStride;
   const std::size_t np = plan.order.size();
-  snapshot = current;
-  // Which points have a finite source, once per sweep: the inner loop then reads one byte per
-  // neighbour (a table that stays in cache) instead of testing its source values.
-  std::vector<std::uint8_t> finite(np);
-  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; ++p) finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
-  });
-  std::vector<double> residuals(kScatterChunks, 0.0);
-  parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
-    for (std::size_t c = c0; c < c1; ++c) {
+  if (sweep.next_chunk == 0) {
+    sweep.snapshot = current;
+    // Which points have a finite source, once per sweep: the inner loop then reads one byte per
+    // neighbour (a table that stays in cache) instead of testing its source values.
+    sweep.finite.resize(np);
+    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+      for (std::size_t p = b; p < e; ++p) sweep.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
+    });
+    sweep.residual = 0.0;
+  }
+  const std::size_t first = sweep.next_chunk;
+  const std::size_t last = std::min(kScatterChunks, first + std::max<std::size_t>(chunks, 1));
+  const std::vector<float>& snapshot = sweep.snapshot;
+  const std::vector<std::uint8_t>& finite = sweep.finite;
+  std::vector<double> residuals(last - first, 0.0);
+  parallel_for(last - first, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = first + c0; c < first + c1; ++c) {
       const std::size_t begin = plan.chunk_begin[c], end = plan.chunk_begin[c + 1];
       double residual = 0.0;
       for (std::size_t p = begin; p < end; ++p) {
@@ -129,10 +145,12 @@ double scatter_sweep(const ScatterPlan& plan, const std::vector<float>& pre, con
           current[S * p + ch] = f;
         }
       }
-      residuals[c] = residual;
+      residuals[c - first] = residual;
     }
   });
-  return *std::max_element(residuals.begin(), residuals.end());
+  for (double r : residuals) sweep.residual = std::max(sweep.residual, r);
+  sweep.next_chunk = last == kScatterChunks ? 0 : last;
+  return last == kScatterChunks;
 }
 
 }  // namespace penumbra::render::lighting

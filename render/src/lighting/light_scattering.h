@@ -54,4 +54,21 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
 double scatter_sweep(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
                      std::vector<float>& current, std::vector<float>& snapshot);
 
+/// A sweep done in pieces, so that a frame's time budget is not left unused for want of room
+/// for a whole sweep. The blocks read each other only through the snapshot taken when the sweep
+/// begins, so its values do not depend on how its blocks are split between calls.
+struct ScatterSweep {
+  std::vector<float> snapshot;
+  std::vector<std::uint8_t> finite;  ///< per position: its source is finite
+  std::size_t next_chunk = 0;        ///< 0: the next piece begins a sweep
+  double residual = 0.0;             ///< largest change so far in this sweep
+  void restart() { next_chunk = 0; }
+};
+
+/// Sweeps blocks [next_chunk, next_chunk + chunks) (at least one; beginning the sweep when
+/// next_chunk is 0). Returns true when that finished the sweep: its largest change is then in
+/// `sweep.residual`, and the next piece begins a new sweep.
+bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                        std::vector<float>& current, ScatterSweep& sweep, std::size_t chunks);
+
 }  // namespace penumbra::render::lighting

@@ -112,6 +112,8 @@ struct LightVolume::Impl {
   double step = 0;
   // The last durations, for the time budget's look-ahead (-1: not timed yet).
   double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
+  lighting::ScatterSweep sweep;  // the CPU sweep in progress (a frame may end inside one)
+  double last_chunk_ms = -1;     // one block of a CPU sweep
   double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
@@ -248,6 +250,7 @@ struct LightVolume::Impl {
     combine_pending = false;
     gpu_scatter_stale = true;
     cpu_scatter_stale = true;
+    sweep.restart();
   }
 };
 
@@ -394,7 +397,19 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     const auto ts = Clock::now();
     const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
     bool gpu_ran = false, cpu_ran = false;
-    while (!im.scatter_done && allowed(im.last_sweep_ms)) {
+    while (!im.scatter_done) {
+      // The CPU sweeps in pieces of whole blocks (two or more, one per core): as many as the
+      // budget has room for, timed per block; the GPU runs whole iterations.
+      std::size_t chunks = lighting::kScatterChunks - im.sweep.next_chunk;
+      if (im.gpu || im.last_chunk_ms < 0 || !std::isfinite(budget.max_ms)) {
+        if (!allowed(im.gpu ? im.last_sweep_ms : im.last_chunk_ms < 0 ? -1.0 : im.last_chunk_ms * chunks)) break;
+      } else {
+        if (!allowed(0.0)) break;  // the work-unit cap
+        const double room = budget.max_ms - ms_since(t0);
+        const auto fit = static_cast<std::size_t>(std::max(0.0, room / im.last_chunk_ms));
+        if (did_work && fit < 2) break;
+        chunks = std::min(chunks, std::max<std::size_t>(fit, 2));
+      }
       const auto tw = Clock::now();
       int ran = 1;
       if (im.gpu) {
@@ -411,9 +426,13 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
           lighting::to_plan_order(im.scatter_plan, im.rgb, im.rgb_planned);
         }
         im.cpu_scatter_stale = false;
-        im.scatter_residual =
-            lighting::scatter_sweep(im.scatter_plan, im.pre_planned, im.opt.sigma_s, im.rgb_planned, im.scratch0);
+        const bool whole = lighting::scatter_sweep_part(im.scatter_plan, im.pre_planned, im.opt.sigma_s, im.rgb_planned,
+                                                        im.sweep, chunks);
         cpu_ran = true;
+        im.last_chunk_ms = ms_since(tw) / static_cast<double>(chunks);
+        did_work = true;
+        if (!whole) continue;
+        im.scatter_residual = im.sweep.residual;
       }
       im.last_sweep_ms = ms_since(tw);
       did_work = true;

@@ -1,6 +1,8 @@
 // tests/unit/lighting/light_scattering_test.cpp -- eq. 9 (combining lights) and eq. 12 (diffusion)
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cmath>
 #include <iostream>
 
@@ -134,6 +136,33 @@ TEST(LightScattering, SweepExcludesNonFiniteValues) {
     ASSERT_TRUE(std::isfinite(v));
     EXPECT_NEAR(v, 0.5f, 1e-6f);  // a constant field, with two holes in it, stays constant
   }
+}
+
+// A sweep done in pieces (a frame's budget ending inside it) gives the same values, bit for bit,
+// as whole sweeps, and reports its residual only when its last block is done.
+TEST(LightScattering, SweepInPiecesEqualsWholeSweeps) {
+  const Scene sc;
+  const render::lighting::Level1Topology topo(*sc.mesh);
+  const auto w = render::lighting::scatter_weights(*sc.mesh, topo);
+  const auto plan = render::lighting::plan_scatter(*sc.mesh, topo, w);
+  std::vector<float> pre(3 * sc.mesh->points.size());
+  for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
+    for (int c = 0; c < 3; ++c) pre[3 * p + c] = static_cast<float>(sc.s[p] * (c + 1));
+  const std::array<double, 3> sigma{0.5, 2.0, 8.0};
+  std::vector<float> planned_pre, whole, pieces, scratch;
+  render::lighting::to_plan_order(plan, pre, planned_pre);
+  whole = pieces = planned_pre;
+  render::lighting::ScatterSweep sweep;
+  const std::size_t split[] = {1, 3, 2, 5, 16, 7};  // uneven pieces; those reaching past a sweep end stop there
+  std::size_t piece = 0;
+  for (int it = 0; it < 5; ++it) {
+    const double want = render::lighting::scatter_sweep(plan, planned_pre, sigma, whole, scratch);
+    bool done = false;
+    while (!done) done = render::lighting::scatter_sweep_part(plan, planned_pre, sigma, pieces, sweep, split[piece++ % 6]);
+    EXPECT_EQ(sweep.residual, want) << "sweep " << it;
+    ASSERT_EQ(0, std::memcmp(whole.data(), pieces.data(), whole.size() * sizeof(float))) << "sweep " << it;
+  }
+  EXPECT_GT(piece, 10u);  // the sweeps really were split
 }
 
 // The sweep against the equation itself: iterated to convergence, every point satisfies

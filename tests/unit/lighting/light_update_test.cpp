@@ -66,6 +66,24 @@ TEST(LightUpdate, BudgetSpreadsWorkOverFrames) {
   EXPECT_LT(frames, 1000);
   for (std::size_t i = 0; i < full.light_rgb().size(); ++i)
     ASSERT_NEAR(stepped.light_rgb()[i], full.light_rgb()[i], 1e-5);
+  // A time budget of zero: one piece per frame, scattering sweeps cut into blocks between frames.
+  LightVolume sliced(mesh, opt);
+  sliced.set_field(s, ramp_tf(2.0));
+  sliced.set_lights({directional({1, 0.3, 0.1}), point_light({1.5, 0.5, 0.5})});
+  render::LightBudget none;
+  none.max_ms = 0;
+  int sliced_frames = 0, scatter_frames = 0, sweeps = 0;
+  for (; sliced_frames < 10000; ++sliced_frames) {
+    const auto r = sliced.update(none);
+    if (r.l1_scatter_ms > 0) ++scatter_frames;
+    sweeps += r.scatter_iterations;
+    if (r.converged) break;
+  }
+  EXPECT_LT(sliced_frames, 10000);
+  EXPECT_GT(sweeps, 0);
+  EXPECT_GT(scatter_frames, sweeps);  // more frames than sweeps: the sweeps were cut
+  for (std::size_t i = 0; i < full.light_rgb().size(); ++i)
+    ASSERT_NEAR(sliced.light_rgb()[i], full.light_rgb()[i], 1e-5);
   // A time budget is honoured too: a zero budget still makes progress (the first piece of work
   // always runs) but starts nothing more.
   stepped.set_lights({directional({0, 0, 1})});
