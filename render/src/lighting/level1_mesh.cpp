@@ -6,6 +6,7 @@
 
 #include "penumbra/core/thread_pool.h"
 #include "tet_geometry.h"
+#include "tet_order.h"
 
 namespace penumbra::render::lighting {
 
@@ -70,13 +71,16 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
   }
   mean_edge = edges ? sum / static_cast<double>(edges) : 0.0;
   min_edge = edges ? smallest : 0.0;
+  const std::vector<std::int32_t> order = detail::morton_order(mesh);
+  field_slot.resize(nt);
+  for (std::size_t i = 0; i < order.size(); ++i) field_slot[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
 }
 
-void Level1Field::build(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf) {
+void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scalars,
+                        const TransferFunction& tf) {
   table = ExtinctionTable(tf);
   const std::size_t nt = mesh.tets.size();
-  base.resize(nt);
-  grad.resize(nt);
+  linear.resize(nt);
   parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) {
       const auto& tv = mesh.tets[t];
@@ -90,10 +94,10 @@ void Level1Field::build(const TetMesh& mesh, const std::vector<float>& scalars, 
       const double d3 = scalars[static_cast<std::size_t>(tv[3])] - s0;
       // Solve e_i . g = d_i by the adjugate: g = (d1 e2xe3 + d2 e3xe1 + d3 e1xe2) / det.
       const double inv = 1.0 / dot(e1, cross(e2, e3));
-      grad[t] = (cross(e2, e3) * d1 + cross(e3, e1) * d2 + cross(e1, e2) * d3) * inv;
+      const Vec3d g = (cross(e2, e3) * d1 + cross(e3, e1) * d2 + cross(e1, e2) * d3) * inv;
       const bool nan = std::isnan(s0) || std::isnan(d1) || std::isnan(d2) || std::isnan(d3);
-      base[t] = nan ? std::nan("") : s0;
-      if (nan) grad[t] = {0, 0, 0};
+      linear[static_cast<std::size_t>(topology.field_slot[t])] =
+          nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{s0 - dot(g, p0), g};
     }
   });
 }

@@ -20,6 +20,10 @@ struct Level1Topology {
   /// Per tet, bit j: face j's canonical normal points inward (see canonical_face_inward), so the
   /// walk gets oriented face planes without a test per crossing.
   std::vector<std::uint8_t> face_inward;
+  /// Per tet, where its record sits in Level1Field: tets along a Morton curve of their centroids,
+  /// so that the walks of neighbouring vertices (which a pass takes one after another) read
+  /// neighbouring records instead of missing the cache at nearly every segment.
+  std::vector<std::int32_t> field_slot;
   double mean_edge = 0.0;
   double min_edge = 0.0;
 
@@ -27,15 +31,25 @@ struct Level1Topology {
   Level1Topology() = default;
 };
 
-/// The scalar as a linear function in each tet, s(p) = base + grad . (p - first vertex), built per
-/// field: the walk evaluates it at segment ends without barycentric solves. A tet with a NaN
-/// vertex has NaN base (no data, no extinction).
+/// The scalar in one tet as a linear function of position, s(p) = offset + grad . p: one 32-byte
+/// record per tet, so that a walk segment reads one cache line for its scalar (a base value at the
+/// tet's first corner read the corner's id and point as well). NaN offset: a vertex without data
+/// (no extinction).
+struct LinearScalar {
+  double offset;
+  Vec3d grad;
+  double at(const Vec3d& p) const { return offset + dot(grad, p); }
+};
+
+/// The scalar per tet, built per field: the walk evaluates it at segment ends without
+/// barycentric solves. Indexed by Level1Topology::field_slot (a warm pass spent most of its time
+/// waiting for these records while they were in mesh order).
 struct Level1Field {
-  std::vector<double> base;
-  std::vector<Vec3d> grad;
+  std::vector<LinearScalar> linear;
   ExtinctionTable table;
 
-  void build(const TetMesh& mesh, const std::vector<float>& scalars, const TransferFunction& tf);
+  void build(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scalars,
+             const TransferFunction& tf);
 };
 
 }  // namespace penumbra::render::lighting

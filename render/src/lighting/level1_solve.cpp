@@ -23,16 +23,15 @@ constexpr double kLinearDepth = 2.772588722239781;
 // Vertices per batch of a pass: the granularity at which a time budget can stop it.
 constexpr std::size_t kBatch = 2048;
 
-double segment_depth(const Level1Context& ctx, std::int32_t t, const Vec3d& x, const Vec3d& d, double ta, double tb,
-                     int& piece_hint) {
+// Optical depth over [ta, tb] of the ray x + t d in the tet whose field slot is `slot`.
+double segment_depth(const Level1Context& ctx, std::int32_t slot, const Vec3d& x, const Vec3d& d, double ta,
+                     double tb, int& piece_hint) {
   if (!(tb > ta)) return 0.0;
-  const auto tt = static_cast<std::size_t>(t);
-  const double base = ctx.field.base[tt];
-  if (std::isnan(base)) return 0.0;
+  const LinearScalar& f = ctx.field.linear[static_cast<std::size_t>(slot)];
+  if (std::isnan(f.offset)) return 0.0;
   // The scalar along the segment: s(x + t d) = s(x) + t (grad . d) within the tet.
-  const Vec3d& g = ctx.field.grad[tt];
-  const double s_x = base + dot(g, x - ctx.mesh.points[static_cast<std::size_t>(ctx.mesh.tets[tt][0])]);
-  const double slope = dot(g, d);
+  const double s_x = f.at(x);
+  const double slope = dot(f.grad, d);
   return ctx.field.table.integral(s_x + slope * ta, s_x + slope * tb, tb - ta, &piece_hint);
 }
 
@@ -167,13 +166,14 @@ Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, co
       }
     }
     t_out = std::max(t_out, t_in);
+    const std::int32_t slot = topo.field_slot[static_cast<std::size_t>(tet)];
     if (t_out >= seg_length || exit < 0) {
-      depth += segment_depth(ctx, tet, x, d, t_in, seg_length, piece_hint);
-      if (record) record->push_back({tet, static_cast<float>(t_in), static_cast<float>(seg_length)});
+      depth += segment_depth(ctx, slot, x, d, t_in, seg_length, piece_hint);
+      if (record) record->push_back({slot, static_cast<float>(t_in), static_cast<float>(seg_length)});
       return {Trace::Kind::inside, tet, x + d * seg_length, depth};
     }
-    depth += segment_depth(ctx, tet, x, d, t_in, t_out, piece_hint);
-    if (record) record->push_back({tet, static_cast<float>(t_in), static_cast<float>(t_out)});
+    depth += segment_depth(ctx, slot, x, d, t_in, t_out, piece_hint);
+    if (record) record->push_back({slot, static_cast<float>(t_in), static_cast<float>(t_out)});
     const std::int32_t next = mesh.neighbors[static_cast<std::size_t>(tet)][exit];
     if (next < 0) return {Trace::Kind::left_mesh, tet, x + d * t_out, depth};
     excluded = 0;
@@ -330,7 +330,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       double depth = 0.0;
       int piece_hint = -1;
       for (const WalkSegment& seg : walk.segments)
-        depth += segment_depth(ctx, seg.tet, x, d, seg.ta, seg.tb, piece_hint);
+        depth += segment_depth(ctx, seg.slot, x, d, seg.ta, seg.tb, piece_hint);
       tr = {static_cast<Trace::Kind>(walk.kind), walk.tet, x + d * static_cast<double>(walk.end), depth};
       if (tr.kind == Trace::Kind::inside) tr.end = x + d * len;
     } else {

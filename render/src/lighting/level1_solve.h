@@ -35,7 +35,7 @@ struct Level1Context {
 
 /// One tet of a recorded walk and the walk's parameter range inside it.
 struct WalkSegment {
-  std::int32_t tet;
+  std::int32_t slot;  ///< the tet's Level1Topology::field_slot
   float ta, tb;
 };
 

@@ -283,7 +283,7 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
               " values but the mesh has " + std::to_string(im.mesh->points.size()) + " points; expected one per point");
   tf.validate();
   im.scalars = point_scalars;
-  im.field.build(*im.mesh, im.scalars, tf);
+  im.field.build(*im.mesh, im.topology, im.scalars, tf);
   im.has_field = true;
   im.resample_pending = true;
   im.mark_all();

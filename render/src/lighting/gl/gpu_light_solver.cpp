@@ -68,6 +68,7 @@ struct GpuLightBuffers {
 struct GpuLightSolver::Impl {
   std::shared_ptr<GpuDevice> device;
   const TetMesh* mesh = nullptr;
+  std::vector<std::int32_t> field_slot;  // Level1Topology::field_slot: where set_field finds a tet
   std::size_t points = 0;
   Vec3d centre;  // the kernels work relative to the mesh centre (float32)
   GLuint level0_program = 0, level1_program = 0, scatter_program = 0;
@@ -176,6 +177,7 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
   Impl& m = *m_impl;
   m.device = std::move(device);
   m.mesh = &mesh;
+  m.field_slot = topology.field_slot;
   m.points = mesh.points.size();
   m.centre = (mesh.bounds.lo + mesh.bounds.hi) * 0.5;
   GpuDevice::Impl& d = m.dev();
@@ -282,10 +284,12 @@ void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field)
   const std::size_t nt = m.mesh->tets.size();
   std::vector<float> tf4(4 * nt);
   for (std::size_t t = 0; t < nt; ++t) {
-    tf4[4 * t] = static_cast<float>(field.grad[t].x);
-    tf4[4 * t + 1] = static_cast<float>(field.grad[t].y);
-    tf4[4 * t + 2] = static_cast<float>(field.grad[t].z);
-    tf4[4 * t + 3] = static_cast<float>(field.base[t]);  // NaN stays NaN: no data
+    // The shader takes the gradient and the scalar at the tet's first vertex.
+    const LinearScalar& f = field.linear[static_cast<std::size_t>(m.field_slot[t])];
+    tf4[4 * t] = static_cast<float>(f.grad.x);
+    tf4[4 * t + 1] = static_cast<float>(f.grad.y);
+    tf4[4 * t + 2] = static_cast<float>(f.grad.z);
+    tf4[4 * t + 3] = static_cast<float>(f.at(m.mesh->points[static_cast<std::size_t>(m.mesh->tets[t][0])]));  // NaN: no data
   }
   // The CPU walk's extinction table, piece by piece: tau linear in s between breakpoints.
   const ExtinctionTable& table = field.table;
