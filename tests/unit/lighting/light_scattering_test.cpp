@@ -1,9 +1,8 @@
 // tests/unit/lighting/light_scattering_test.cpp -- eq. 9 (combining lights) and eq. 12 (diffusion)
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 #include <cmath>
+#include <cstring>
 #include <iostream>
 
 #include "lighting/level1_mesh.h"
