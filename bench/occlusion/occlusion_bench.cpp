@@ -1,11 +1,12 @@
 // bench/occlusion/occlusion_bench.cpp -- cone-traced directional occlusion and shadows: speed of a
 // frame beside its error against the Monte Carlo image (thesis tables 3.3-3.6 in spirit).
 //
-// Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--frames N] [--size WxH]
+// Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--shared-data DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
 //          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
+// disk-out-ref (the hexahedra of ../shared/data/disk_out_ref.ex2, --shared-data DIR),
 // grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets).
 //
 // Every mode renders colour(s) x L(x) with L per mesh point, interpolated by the CPU ray caster
@@ -47,6 +48,7 @@
 #include <memory>
 
 #include "bench_util.h"
+#include "exodus_mesh.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/cpu_ray_caster.h"
@@ -130,6 +132,33 @@ Setup hexblock(int n, int width, int height, bool plate) {
   return s;
 }
 
+// disk-out-ref: ParaView's "disk_out_ref" example from ../shared/data (7472 hexahedra of a
+// cylindrical reactor around a spinning disk, split into tets on preparation), its temperature
+// normalised to [0, 1] through a semi-transparent transfer function, seen obliquely.
+Setup disk_out_ref(const std::string& shared_dir, int width, int height) {
+  const pb::HexMesh hm = pb::read_exodus_hexes(shared_dir + "/disk_out_ref.ex2", "Temp");
+  static const std::uint8_t hexahedron = 12;
+  penumbra::MeshView view;
+  view.points = {reinterpret_cast<const std::byte*>(hm.points.data()), hm.points.size() / 3, 3 * sizeof(double)};
+  view.point_type = penumbra::ScalarType::float64;
+  view.connectivity = {hm.hexes.data(), hm.hexes.size(), penumbra::ScalarType::int64};
+  view.cell_types = &hexahedron;
+  view.cell_type_count = 1;
+  view.topology_version = 1;
+  Setup s;
+  s.name = "disk-out-ref";
+  s.mesh = std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(view, "bench"));
+  const auto [lo, hi] = std::minmax_element(hm.field.begin(), hm.field.end());
+  s.scalars.resize(hm.field.size());
+  for (std::size_t p = 0; p < s.scalars.size(); ++p) s.scalars[p] = (hm.field[p] - *lo) / (*hi - *lo);
+  // Extinction per world unit (the mesh is about 20 units long): the hot core near the disk is
+  // the densest, the cold gas nearly clear.
+  s.tf.colors = {{0.0, 0.2, 0.4, 0.9}, {0.5, 0.9, 0.9, 0.8}, {1.0, 0.9, 0.3, 0.1}};
+  s.tf.opacities = {{0.0, 0.0}, {0.2, 0.1}, {0.5, 0.75}, {0.7, 3.0}, {0.85, 1.0}, {1.0, 2.0}};
+  s.camera = pr::Camera::look_at({30.0, -22.0, 18.0}, {0.0, 0.0, 0.0}, {0, 0, 1}, 30.0, width, height);
+  return s;
+}
+
 Setup bench_scene(const std::string& name, const std::string& data_dir, int width, int height) {
   const pb::Scene sc = pb::load_scene(name, data_dir);
   Setup s;
@@ -189,6 +218,7 @@ ImageDiff compare(const pr::Image& a, const pr::Image& b, const float background
 int run(int argc, char** argv) {
   const std::string name = pb::option(argc, argv, "scene", "hexblock-hole");
   const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const std::string shared_dir = pb::option(argc, argv, "shared-data", "../shared/data");
   const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
   const std::string size = pb::option(argc, argv, "size", "512x512");
   const int grid_res = std::stoi(pb::option(argc, argv, "grid", "128"));
@@ -230,7 +260,8 @@ int run(int argc, char** argv) {
   penumbra::require(frames >= 1, "pnb_bench_occlusion: --frames must be >= 1");
 
   const Setup s = name == "hexblock-hole" || name == "plate-shadow" ? hexblock(hex_n, width, height, name == "plate-shadow")
-                                                                    : bench_scene(name, data_dir, width, height);
+                  : name == "disk-out-ref"                            ? disk_out_ref(shared_dir, width, height)
+                                                                      : bench_scene(name, data_dir, width, height);
   const pr::TetMesh& mesh = *s.mesh;
   const pr::CpuRayCaster caster(s.mesh);
   const Vec3d eye = s.camera.eye;
