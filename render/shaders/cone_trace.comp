@@ -1,9 +1,8 @@
 // render/shaders/cone_trace.comp -- one Gaussian cone per invocation, as
 // render/src/occlusion/cone_tracer.cpp (ConeTracer::transmittance) and occlusion_shading.cpp
 //
-// The schedule (distance, trapezoid weight, section weight times alpha, level and the blend toward
-// the next level, cone count) is the
-// host ConeTracer's, so both paths take the same samples; this shader only walks it. Positions are
+// The schedule (distance, trapezoid weight, section weight times alpha, the level, the level it
+// blends toward and the blend, cone count) is the host ConeTracer's, so both paths take the same samples; this shader only walks it. Positions are
 // relative to the pyramid's bounds centre so that float32 keeps ~1e-7 of the domain size.
 // Fetches are trilinear from the level's nodes and read 0 beyond them (tau = 0 outside, never
 // clamp-to-edge), exactly as PyramidLevel::sample.
@@ -18,7 +17,7 @@ struct LevelInfo {
 };
 struct ScheduleEntry {
   vec4 distance_weight_kappa;  // distance, trapezoid weight, kappa * alpha, blend toward level + 1
-  ivec4 level_cones;           // pyramid level, cones in the section (1, 3, 7), unused x2
+  ivec4 level_cones;           // level, cones in the section (1, 3, 7), level blended toward, unused
 };
 
 layout(std430, binding = 0) readonly buffer Levels { float tau[]; };
@@ -138,7 +137,7 @@ float trace(vec3 apex, vec3 axis, float max_length) {
     for (int i = 0; i < cones; ++i) {
       vec3 x = apex + dirs[i] * dist;
       float t = fetch(lc.x, x);
-      if (dwk.w > 0.0) t += dwk.w * (fetch(lc.x + 1, x) - t);
+      if (dwk.w > 0.0) t += dwk.w * (fetch(lc.z, x) - t);
       float a = kappa * t;
       depth[i] += weight * (amp[i] + a);
       amp[i] = a;

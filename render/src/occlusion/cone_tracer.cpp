@@ -103,7 +103,17 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
     int level = static_cast<int>(std::floor(lambda));
     double blend = lambda - level;
     if (level >= top) level = top, blend = 0.0;
-    const double sigma = sigma0 * std::exp2(lambda);
+    double sigma = sigma0 * std::exp2(lambda);
+    if (o.unfiltered_grid && r < 2.0 * sigma0 && pyramid.fine().sigma < sigma0) {
+      // Narrower than level 0's filter: the unfiltered grid, blended toward level 0 linearly in
+      // log2 sigma (occlusion.h, "Below level 0").
+      const double fine = pyramid.fine().sigma;
+      const double lambda_fine = std::log2(fine / sigma0);
+      const double want = std::max(fine, 0.5 * r);
+      level = kFineLevel;
+      blend = (std::log2(want / sigma0) - lambda_fine) / -lambda_fine;
+      sigma = want;
+    }
     m_schedule.push_back({d, first ? 0.0 : 0.5 * (d - prev_d), section_weight(o.weight, r, sigma, o.attenuation), level, cones, blend});
     if (d >= m_length) break;
     prev_d = d;
@@ -156,8 +166,8 @@ double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis, double ma
       for (int i = 0; i < cones; ++i)
         dirs[i] = world(cones == 3 ? m_dir3[static_cast<std::size_t>(i)] : m_dir7[static_cast<std::size_t>(i)]);
     }
-    const PyramidLevel& lev = m_pyramid->level(cs.level);
-    const PyramidLevel& next = m_pyramid->level(cs.blend > 0 ? cs.level + 1 : cs.level);
+    const PyramidLevel& lev = cs.level == kFineLevel ? m_pyramid->fine() : m_pyramid->level(cs.level);
+    const PyramidLevel& next = cs.blend > 0 ? m_pyramid->level(cs.level + 1) : lev;
     bool all_opaque = true;
     for (int i = 0; i < cones; ++i) {
       const Vec3d x = apex + dirs[i] * cs.distance;

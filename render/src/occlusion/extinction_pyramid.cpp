@@ -171,6 +171,11 @@ ExtinctionPyramid::ExtinctionPyramid(const ExtinctionGrid& grid, const PyramidOp
       make_level(l, dims, opacity ? to_extinction(data, cell) : data);
     }
   }
+  m_fine.dims = grid.dims;
+  m_fine.lo = grid.lo;
+  m_fine.spacing = grid.spacing;
+  m_fine.sigma = grid.mean_spacing() / std::sqrt(6.0);
+  m_fine.tau = grid.tau;
   m_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

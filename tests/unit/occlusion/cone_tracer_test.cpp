@@ -12,7 +12,9 @@ namespace {
 TEST(ConeTracer, ScheduleFollowsTheThesis) {
   const ExtinctionPyramid p(grid(65, -1, 1, [](const Vec3d&) { return 0.0; }));
   const double s0 = p.sigma0();
-  const ConeTracer t(p, ConeOptions::occlusion(20.0, 7));
+  ConeOptions o = ConeOptions::occlusion(20.0, 7);
+  o.unfiltered_grid = false;  // level 0 for the narrowest sections too (see the next test)
+  const ConeTracer t(p, o);
   const auto& s = t.schedule();
   ASSERT_GT(s.size(), 5u);
   EXPECT_DOUBLE_EQ(s.front().distance, 3.0 * s0);  // h0 = 3 sigma0
@@ -43,6 +45,52 @@ TEST(ConeTracer, ScheduleFollowsTheThesis) {
   EXPECT_TRUE(saw_blend);
   EXPECT_TRUE(saw3);
   EXPECT_TRUE(saw7);
+}
+
+// Sections narrower than level 0's filter read the unfiltered grid, blended toward level 0 with
+// sigma = max(h / sqrt 6, r / 2) (linear in log2 sigma), in steps of 2.5 times that sigma; from
+// r = 2 sigma0 on, the pyramid's levels as before.
+TEST(ConeTracer, NarrowSectionsReadTheUnfilteredGrid) {
+  const ExtinctionPyramid p(grid(65, -1, 1, [](const Vec3d&) { return 0.0; }));
+  const double s0 = p.sigma0(), fine = p.fine().sigma;
+  EXPECT_NEAR(fine, s0 / std::sqrt(6.0), 1e-15);
+  const ConeTracer t(p, ConeOptions::shadow(2.0, 1));
+  const auto& s = t.schedule();
+  const double tan_theta = std::tan(2.0 * kPi / 180);
+  int below = 0, above = 0;
+  for (std::size_t i = 0; i + 1 < s.size(); ++i) {
+    const double r = s[i].distance * tan_theta;
+    if (r < 2.0 * s0) {
+      ++below;
+      ASSERT_EQ(s[i].level, kFineLevel) << i;
+      const double sigma = std::max(fine, 0.5 * r);
+      EXPECT_NEAR(s[i].blend, std::log2(sigma / fine) / std::log2(s0 / fine), 1e-12) << i;
+      if (i > 0) EXPECT_NEAR(s[i + 1].distance - s[i].distance, 2.5 * sigma, 1e-12) << i;
+    } else {
+      ++above;
+      EXPECT_GE(s[i].level, 0) << i;
+    }
+  }
+  EXPECT_GT(below, 5);
+  EXPECT_GT(above, 5);
+  // A thin absorbing sheet across the axis, 0.3 ahead, in the half x >= 0: two node planes at
+  // tau = 20, so the grid's trilinear profile integrates to 20 * 2h along z. A narrow cone through
+  // it reads that depth from the unfiltered grid; level 0 (opacity filtered over a cell, then
+  // blurred) reads less. A cone passing beside the sheet's edge at 1.5 level-0 sigmas sees much
+  // less of it than level 0's wider filter pulls in.
+  const double h = 2.0 / 64;
+  const ExtinctionPyramid sheet(grid(65, -1, 1, [&](const Vec3d& x) { return x.x >= 0 && std::fabs(x.z - 0.3) <= h ? 20.0 : 0.0; }));
+  const double exact = std::exp(-20.0 * 2.0 * h);
+  ConeOptions narrow = ConeOptions::shadow(0.5, 1);
+  narrow.length = 0.8;
+  const ConeTracer with(sheet, narrow);
+  narrow.unfiltered_grid = false;
+  const ConeTracer without(sheet, narrow);
+  const Vec3d beside{-1.5 * sheet.sigma0(), 0.0, 0.0};
+  EXPECT_GT(with.transmittance(beside, {0, 0, 1}), without.transmittance(beside, {0, 0, 1}) + 0.05);
+  const Vec3d through{0.3, 0.0, 0.0};
+  EXPECT_NEAR(with.transmittance(through, {0, 0, 1}), exact, 0.01);  // the trapezoid over a tent
+  EXPECT_GT(std::fabs(without.transmittance(through, {0, 0, 1}) - exact), 0.05);
 }
 
 // Infinite (large) homogeneous medium: T = exp(-tau (L - h0)) for every aperture and split count.

@@ -1,7 +1,8 @@
 // render/src/occlusion/gl/gpu_cone_tracer.cpp -- buffers, uniforms and dispatches of the
 // cone-tracing shader (render/shaders/cone_trace.comp)
 //
-// Device layout: every pyramid level in one float32 storage buffer, a 48-byte header per level
+// Device layout: every pyramid level, then the unfiltered grid (ExtinctionPyramid::fine()), in one
+// float32 storage buffer, a 48-byte header per level
 // (dims + offset, lo, 1 / spacing), the host ConeTracer's schedule at 32 bytes per sample, query
 // points as float32 xyz and one float32 result per query. Positions go to the device relative to
 // the pyramid's bounds centre.
@@ -72,8 +73,11 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
   const auto t0 = Clock::now();
   const Bounds& b = pyramid.bounds();
   const Vec3d centre = (b.lo + b.hi) * 0.5;
+  // The levels, then the unfiltered grid (ExtinctionPyramid::fine()) at index levels().
+  const int count = pyramid.levels() + 1;
+  auto level_at = [&](int l) -> const PyramidLevel& { return l < pyramid.levels() ? pyramid.level(l) : pyramid.fine(); };
   std::size_t values = 0;
-  for (int l = 0; l < pyramid.levels(); ++l) values += pyramid.level(l).tau.size();
+  for (int l = 0; l < count; ++l) values += level_at(l).tau.size();
   require(values < (std::size_t{1} << 31), "GpuExtinctionPyramid: " + std::to_string(values) +
                                                " pyramid values exceed the shader's 32-bit indices");
   struct Info {
@@ -81,10 +85,10 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
     float lo[4];
     float inv_spacing[4];
   };
-  std::vector<Info> info(static_cast<std::size_t>(pyramid.levels()));
+  std::vector<Info> info(static_cast<std::size_t>(count));
   std::size_t offset = 0;
-  for (int l = 0; l < pyramid.levels(); ++l) {
-    const PyramidLevel& lev = pyramid.level(l);
+  for (int l = 0; l < count; ++l) {
+    const PyramidLevel& lev = level_at(l);
     Info& in = info[static_cast<std::size_t>(l)];
     for (int a = 0; a < 3; ++a) {
       in.dims_offset[a] = lev.dims[static_cast<std::size_t>(a)];
@@ -100,8 +104,8 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
   levels.reserve(gl, dev(), values * sizeof(float), "GpuExtinctionPyramid", "extinction pyramid levels");
   infos.reserve(gl, dev(), info.size() * sizeof(Info), "GpuExtinctionPyramid", "pyramid level headers");
   offset = 0;
-  for (int l = 0; l < pyramid.levels(); ++l) {
-    const std::vector<float>& tau = pyramid.level(l).tau;
+  for (int l = 0; l < count; ++l) {
+    const std::vector<float>& tau = level_at(l).tau;
     gl.NamedBufferSubData(levels.name, static_cast<GLintptr>(offset * sizeof(float)),
                           static_cast<GLsizeiptr>(tau.size() * sizeof(float)), tau.data());
     offset += tau.size();
@@ -299,9 +303,13 @@ GpuConeTracer::GpuConeTracer(const GpuExtinctionPyramid& pyramid, const ConeOpti
     GLint level_cones[4];
   };
   std::vector<Entry> entries(s.size());
-  for (std::size_t i = 0; i < s.size(); ++i)
+  // Level and the level it blends toward; the unfiltered grid sits after the pyramid's levels.
+  const int fine = pyramid.host().levels();
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const bool below = s[i].level == kFineLevel;
     entries[i] = {{static_cast<float>(s[i].distance), static_cast<float>(s[i].weight), static_cast<float>(s[i].kappa), static_cast<float>(s[i].blend)},
-                  {s[i].level, s[i].cones, 0, 0}};
+                  {below ? fine : s[i].level, s[i].cones, below ? 0 : s[i].level + 1, 0}};
+  }
   m.schedule_count = static_cast<int>(s.size());
   CurrentContext current(m.dev());
   const GlApi& gl = current.gl();
