@@ -46,10 +46,11 @@
 // grows from that to sigma0, linearly in log2 sigma like the levels above, with steps of 2.5
 // times the blended sigma (a few more samples near the apex). Measured on bench/occlusion (mean
 // Delta E against Monte Carlo, CPU, with the lateral variance below), before -> after:
-// hexblock-hole 2.18 -> 1.71 (3 cones, per point), 2.03 -> 1.56 (3, object space), 1.84 -> 1.35
-// (7, object space), AO + 2 deg shadow 2.97 -> 1.49; plate-shadow 0.62 -> 0.59, AO + shadow 0.66
-// -> 0.59; disk-out-ref 0.29 -> 0.20, AO + shadow 0.38 -> 0.18. ConeOptions::unfiltered_grid
-// = false reads level 0 there, as the thesis does.
+// hexblock-hole 2.18 -> 1.76 (3 cones, per point), 2.03 -> 1.62 (3, object space), 1.84 -> 1.41
+// (7, object space), AO + 2 deg shadow 2.97 -> 1.56; plate-shadow 0.62 -> 0.59, AO + shadow 0.66
+// -> 0.59; disk-out-ref 0.29 -> 0.21, AO + shadow 0.38 -> 0.19. AO with 3 cones in object space
+// on the 1M-tet holeblock: 1.71x the unlit frame. ConeOptions::unfiltered_grid = false reads
+// level 0 there, as the thesis does.
 //
 // Section weight kappa. Eq. 3-15 takes kappa = (p_r sigma sqrt(2 pi))^2 / (pi r^2), p_r the share
 // of a 1D Gaussian within [-r, r]: the Gaussian integral truncated to the square around the cone
