@@ -247,11 +247,17 @@ struct ConeOptions {
     o.splits = splits;
     return o;
   }
+  /// Shadow cones start at the point (gap 0), like the light they stand for: the gap keeps an
+  /// occlusion cone off the blur around its own apex, but near the apex a narrow cone reads the
+  /// unfiltered grid (unfiltered_grid), so there is no blur to keep away from. Measured on
+  /// bench/occlusion's plate-shadow (2 deg, mean Delta E against the exact shadow): 1.38 with the
+  /// default gap of 3 sigma0, 0.47 from the point.
   static ConeOptions shadow(double aperture_deg = 1.0, int splits = 1) {
     ConeOptions o;
     o.aperture_deg = aperture_deg;
     o.splits = splits;
     o.fraction_of_diagonal = 0.75;
+    o.gap = 0.0;
     return o;
   }
 };
