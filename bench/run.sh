@@ -37,18 +37,20 @@ build_targets() {
   cmake --build "$build" --parallel "$(nproc)" --target "$@" >&2
 }
 
-# The graded non-convex holeblock of bench/scenes/holeblock.geo at h = 0.156 (about 1M tets;
-# shared/data/MESHES.md, Route A). Generated once, then cached in build-bench/data.
+# The graded non-convex holeblock of bench/scenes/holeblock.geo (shared/data/MESHES.md, Route A):
+# holeblock_mesh [NAME H], by default holeblock-1m at h = 0.156 (about 1M tets); holeblock-100k is
+# h = 0.34 (about 98K tets). Generated once, then cached in build-bench/data.
 holeblock_mesh() {
-  local out=$data/holeblock-1m.vtk
+  local name=${1:-holeblock-1m} h=${2:-0.156}
+  local out=$data/$name.vtk
   [ -f "$out" ] && return 0
   command -v gmsh >/dev/null || { log "gmsh is missing: run scripts/setup.sh"; exit 1; }
   mkdir -p "$data"
-  log "generating $out with gmsh (about a minute)"
-  gmsh -3 -nt "$(nproc)" -algo hxt -bin -format vtk -setnumber h 0.156 -setnumber ratio 20 \
-    -o "$data/holeblock-1m.tmp.vtk" "$root/bench/scenes/holeblock.geo" >"$data/gmsh-holeblock-1m.log" 2>&1 \
-    || { log "gmsh failed, see $data/gmsh-holeblock-1m.log"; exit 1; }
-  mv "$data/holeblock-1m.tmp.vtk" "$out"
+  log "generating $out with gmsh (up to a minute)"
+  gmsh -3 -nt "$(nproc)" -algo hxt -bin -format vtk -setnumber h "$h" -setnumber ratio 20 \
+    -o "$data/$name.tmp.vtk" "$root/bench/scenes/holeblock.geo" >"$data/gmsh-$name.log" 2>&1 \
+    || { log "gmsh failed, see $data/gmsh-$name.log"; exit 1; }
+  mv "$data/$name.tmp.vtk" "$out"
 }
 
 bench_render() {

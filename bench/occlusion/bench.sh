@@ -1,7 +1,8 @@
 # usage: occlusion  (cone-traced directional occlusion and shadows: emission-absorption, AO with splits 1/3/7 per point and in object space, AO + shadows; ms per frame beside CIELAB Delta E against Monte Carlo images)
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $build, $data and
-# $frames. Environment: PNB_BENCH_OCC_SCENES (default "hexblock-hole plate-shadow disk-out-ref grid-aligned";
-# disk-out-ref is the hex mesh ../shared/data/disk_out_ref.ex2; holeblock-1m
+# $frames. Environment: PNB_BENCH_OCC_SCENES (default "hexblock-hole plate-shadow disk-out-ref holeblock-100k
+# grid-aligned"; disk-out-ref is the hex mesh ../shared/data/disk_out_ref.ex2; holeblock-100k (generated
+# with gmsh on first use) the graded hole-block tet mesh small enough for Monte Carlo; holeblock-1m
 # is generated with gmsh on first use), PNB_BENCH_OCC_SIZE (WxH, default 512x512),
 # PNB_BENCH_OCC_GRID (extinction grid nodes along the longest axis, default 128),
 # PNB_BENCH_OCC_PREILLUM (pre-illumination volume resolution, default 64),
@@ -17,8 +18,9 @@
 bench_occlusion() {
   build_targets pnb_bench_occlusion
   local scene bin=$build/bench
-  for scene in ${PNB_BENCH_OCC_SCENES:-hexblock-hole plate-shadow disk-out-ref grid-aligned}; do
+  for scene in ${PNB_BENCH_OCC_SCENES:-hexblock-hole plate-shadow disk-out-ref holeblock-100k grid-aligned}; do
     [ "$scene" = holeblock-1m ] && holeblock_mesh
+    [ "$scene" = holeblock-100k ] && holeblock_mesh holeblock-100k 0.34
     log "occlusion/$scene: Monte Carlo light fields first (small scenes only), then every mode"
     "$bin/pnb_bench_occlusion" --scene "$scene" --data-dir "$data" --shared-data "$root/../shared/data" --frames "$frames" \
       --size "${PNB_BENCH_OCC_SIZE:-512x512}" --grid "${PNB_BENCH_OCC_GRID:-128}" \

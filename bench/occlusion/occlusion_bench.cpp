@@ -7,7 +7,8 @@
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
 // disk-out-ref (the hexahedra of ../shared/data/disk_out_ref.ex2, --shared-data DIR),
-// grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets).
+// grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets), holeblock-100k (the same
+// graded hole-block at about 98K tets, small enough for Monte Carlo).
 //
 // Every mode renders colour(s) x L(x) with L per mesh point, interpolated by the CPU ray caster
 // (LightingModel::light_volume with ambient 1, no diffuse or specular, so the image differs from

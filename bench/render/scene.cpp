@@ -76,11 +76,12 @@ void sample_field(Scene& scene, F&& f) {
 
 // Graded non-convex L-block with a through-hole and an internal void (MESHES.md, Route A,
 // h = 0.156: about 1M tets), seen obliquely so that no family of faces lines up with the view.
-Scene holeblock(const std::string& data_dir) {
+// `name` is the file's stem: holeblock-1m, or holeblock-100k (the same domain at h = 0.34).
+Scene holeblock(const std::string& data_dir, const std::string& name) {
   Scene s;
-  s.name = "holeblock-1m";
+  s.name = name;
   s.kind = "graded-nonconvex";
-  read_legacy_tets(data_dir + "/holeblock-1m.vtk", s);
+  read_legacy_tets(data_dir + "/" + name + ".vtk", s);
   sample_field(s, [](double x, double y, double z) {
     return 0.5 + 0.3 * std::sin(1.7 * x + 0.4) * std::cos(2.3 * y) + 0.2 * std::cos(3.1 * z + 1.3 * x);
   });
@@ -149,10 +150,10 @@ struct Digest {
 std::vector<std::string> scene_names() { return {"holeblock-1m", "grid-aligned"}; }
 
 Scene load_scene(const std::string& name, const std::string& data_dir) {
-  if (name == "holeblock-1m") return holeblock(data_dir);
+  if (name == "holeblock-1m" || name == "holeblock-100k") return holeblock(data_dir, name);
   if (name == "grid-aligned") return grid_aligned(56);
   throw Error(ErrorCode::invalid_argument,
-              "load_scene: unknown scene '" + name + "', expected holeblock-1m or grid-aligned");
+              "load_scene: unknown scene '" + name + "', expected holeblock-1m, holeblock-100k or grid-aligned");
 }
 
 std::string scene_digest(const Scene& scene) {
