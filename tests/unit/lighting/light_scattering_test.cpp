@@ -137,20 +137,31 @@ TEST(LightScattering, SweepExcludesNonFiniteValues) {
   }
 }
 
+// The diffusion sweep's inputs on Scene's mesh: a source per point (the field times 1, 2, 3 per
+// channel) in the plan's order, and three different step sizes.
+struct SweepScene {
+  const Scene sc;
+  const render::lighting::Level1Topology topo{*sc.mesh};
+  const std::vector<float> w = render::lighting::scatter_weights(*sc.mesh, topo);
+  const render::lighting::ScatterPlan plan = render::lighting::plan_scatter(*sc.mesh, topo, w);
+  const std::array<double, 3> sigma{0.5, 2.0, 8.0};
+  std::vector<float> pre, planned_pre;
+  SweepScene() {
+    pre.resize(3 * sc.mesh->points.size());
+    for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
+      for (int c = 0; c < 3; ++c) pre[3 * p + c] = static_cast<float>(sc.s[p] * (c + 1));
+    render::lighting::to_plan_order(plan, pre, planned_pre);
+  }
+};
+
 // A sweep done in pieces (a frame's budget ending inside it) gives the same values, bit for bit,
 // as whole sweeps, and reports its residual only when its last block is done.
 TEST(LightScattering, SweepInPiecesEqualsWholeSweeps) {
-  const Scene sc;
-  const render::lighting::Level1Topology topo(*sc.mesh);
-  const auto w = render::lighting::scatter_weights(*sc.mesh, topo);
-  const auto plan = render::lighting::plan_scatter(*sc.mesh, topo, w);
-  std::vector<float> pre(3 * sc.mesh->points.size());
-  for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
-    for (int c = 0; c < 3; ++c) pre[3 * p + c] = static_cast<float>(sc.s[p] * (c + 1));
-  const std::array<double, 3> sigma{0.5, 2.0, 8.0};
-  std::vector<float> planned_pre, whole, pieces, scratch;
-  render::lighting::to_plan_order(plan, pre, planned_pre);
-  whole = pieces = planned_pre;
+  const SweepScene ss;
+  const auto& plan = ss.plan;
+  const auto& planned_pre = ss.planned_pre;
+  const auto& sigma = ss.sigma;
+  std::vector<float> whole = planned_pre, pieces = planned_pre, scratch;
   render::lighting::ScatterSweep sweep;
   const std::size_t split[] = {1, 3, 2, 5, 16, 7};  // uneven pieces; those reaching past a sweep end stop there
   std::size_t piece = 0;
@@ -167,17 +178,15 @@ TEST(LightScattering, SweepInPiecesEqualsWholeSweeps) {
 // The sweep against the equation itself: iterated to convergence, every point satisfies
 // L_v = (L0_v + s sum_i w_i L_i) / (1 + s sum_i w_i) with the normalised weights of eq. 12.
 TEST(LightScattering, SweepConvergesToTheImplicitStep) {
-  const Scene sc;
-  const render::lighting::Level1Topology topo(*sc.mesh);
-  const auto w = render::lighting::scatter_weights(*sc.mesh, topo);
-  const auto plan = render::lighting::plan_scatter(*sc.mesh, topo, w);
-  std::vector<float> pre(3 * sc.mesh->points.size());
-  for (std::size_t p = 0; p < sc.mesh->points.size(); ++p)
-    for (int c = 0; c < 3; ++c) pre[3 * p + c] = static_cast<float>(sc.s[p] * (c + 1));
-  const std::array<double, 3> sigma{0.5, 2.0, 8.0};
-  std::vector<float> planned_pre, planned, out, scratch;
-  render::lighting::to_plan_order(plan, pre, planned_pre);
-  planned = planned_pre;
+  const SweepScene ss;
+  const Scene& sc = ss.sc;
+  const auto& topo = ss.topo;
+  const auto& w = ss.w;
+  const auto& plan = ss.plan;
+  const auto& pre = ss.pre;
+  const auto& planned_pre = ss.planned_pre;
+  const auto& sigma = ss.sigma;
+  std::vector<float> planned = planned_pre, out, scratch;
   int iterations = 0;
   while (render::lighting::scatter_sweep(plan, planned_pre, sigma, planned, scratch) > 1e-7 && iterations < 2000)
     ++iterations;
