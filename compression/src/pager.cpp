@@ -130,6 +130,14 @@ std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator Pager::make_
   return m_resident.find(page);
 }
 
+void Pager::enter_page_locked(std::size_t page) {
+  if (m_current != page) {
+    m_current = page;
+    evict_locked(page, page + 1);
+  }
+  request_prefetch_locked(page + 1);
+}
+
 bool Pager::resident(std::uint64_t step) const {
   const std::size_t page = m_field->page_of_step(step);
   std::lock_guard<std::mutex> lock(m_mutex);
@@ -153,11 +161,7 @@ void Pager::prepare(std::uint64_t step) {
   const auto start = std::chrono::steady_clock::now();
   std::unique_lock<std::mutex> lock(m_mutex);
   make_resident_locked(lock, page);
-  if (m_current != page) {
-    m_current = page;
-    evict_locked(page, page + 1);
-  }
-  request_prefetch_locked(page + 1);
+  enter_page_locked(page);
   m_stats.prepare_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -176,11 +180,7 @@ void Pager::read_step(std::uint64_t step, float* out) {
       m_stats.stall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     data = it->second;
-    if (m_current != page) {
-      m_current = page;
-      evict_locked(page, page + 1);
-    }
-    request_prefetch_locked(page + 1);
+    enter_page_locked(page);
   }
   m_cursor.decode(data, std::uint32_t(step - data->first_step), out);
 }

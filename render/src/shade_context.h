@@ -21,7 +21,7 @@ struct ShadeContext {
   bool headlight = true;
   Vec3d to_light{0, 0, 0};
   /// shading.shininess when it is a whole number up to 1024 (then the highlight takes a few
-  /// multiplications instead of std::pow, which costed about a third of a lit walk), else -1.
+  /// multiplications instead of std::pow, which cost about a third of a lit walk), else -1.
   int whole_shininess = -1;
 
   // The Phong factor of a tet seen along unit direction d. A vanishing gradient (a constant

@@ -60,7 +60,9 @@ public:
 private:
   void prefetch_loop();
   void request_prefetch_locked(std::size_t page);
-  /// Makes `page` resident and current, waiting for an in-flight load or loading it here.
+  /// Playback is on `page`: keeps it and the next, drops the rest, prefetches the next.
+  void enter_page_locked(std::size_t page);
+  /// Makes `page` resident, waiting for an in-flight load or loading it here (then current too).
   std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator make_resident_locked(
       std::unique_lock<std::mutex>& lock, std::size_t page);
   void evict_locked(std::size_t keep_a, std::size_t keep_b);
