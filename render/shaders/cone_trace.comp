@@ -2,8 +2,9 @@
 // render/src/occlusion/cone_tracer.cpp (ConeTracer::transmittance) and occlusion_shading.cpp
 //
 // The schedule (distance, trapezoid weight, section weight times alpha, the level, the level it
-// blends toward and the blend, cone count) is the host ConeTracer's, so both paths take the same samples; this shader only walks it. Positions are
-// relative to the pyramid's bounds centre so that float32 keeps ~1e-7 of the domain size.
+// blends toward and the blend, cone count) is the host ConeTracer's, so both paths take the same
+// samples; this shader only walks it. Positions are relative to the pyramid's bounds centre so
+// that float32 keeps ~1e-7 of the domain size.
 // Fetches are trilinear from the level's nodes and read 0 beyond them (tau = 0 outside, never
 // clamp-to-edge), exactly as PyramidLevel::sample.
 #version 450
@@ -16,7 +17,7 @@ struct LevelInfo {
   vec4 inv_spacing;
 };
 struct ScheduleEntry {
-  vec4 distance_weight_kappa;  // distance, trapezoid weight, kappa * alpha, blend toward level + 1
+  vec4 distance_weight_kappa;  // distance, trapezoid weight, kappa * alpha, blend toward level_cones.z
   ivec4 level_cones;           // level, cones in the section (1, 3, 7), level blended toward, unused
 };
 
@@ -55,6 +56,7 @@ uniform float u_lateral3;  // ConeTracer::lateral_variance_ratio(3) and (7)
 uniform float u_lateral7;
 
 const float kOpaqueDepth = 40.0;
+const float kSaturatedDepth = 10.0;  // as in cone_tracer.cpp
 
 bool finite_value(float x) { return (floatBitsToUint(x) & 0x7fffffffu) < 0x7f800000u; }
 
@@ -148,11 +150,15 @@ float trace(vec3 apex, vec3 axis, float max_length) {
   // Variance within each final cone from the spread between them (occlusion.h, "Lateral variance").
   float within = 0.0;
   if (cones > 1) {
-    // Opaque depths enter clamped, as in cone_tracer.cpp (kSaturatedDepth).
+    // Opaque depths enter clamped, as in cone_tracer.cpp.
+    float clamped[7];
     float mean = 0.0, spread = 0.0;
-    for (int i = 0; i < cones; ++i) mean += min(depth[i], 10.0);
+    for (int i = 0; i < cones; ++i) {
+      clamped[i] = min(depth[i], kSaturatedDepth);
+      mean += clamped[i];
+    }
     mean /= float(cones);
-    for (int i = 0; i < cones; ++i) spread += (min(depth[i], 10.0) - mean) * (min(depth[i], 10.0) - mean);
+    for (int i = 0; i < cones; ++i) spread += (clamped[i] - mean) * (clamped[i] - mean);
     within = (cones == 3 ? u_lateral3 : u_lateral7) * spread / float(cones);
   }
   // Cosine-weighted mean over the final cones, each the mean of exp(-D) over a gamma-distributed D.
