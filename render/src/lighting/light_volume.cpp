@@ -411,6 +411,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         chunks = std::min(chunks, std::max<std::size_t>(fit, 2));
       }
       const auto tw = Clock::now();
+      did_work = true;
       int ran = 1;
       if (im.gpu) {
         // A batch of Jacobi iterations, never more than the cap or the work units left.
@@ -430,12 +431,10 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
                                                         im.sweep, chunks);
         cpu_ran = true;
         im.last_chunk_ms = ms_since(tw) / static_cast<double>(chunks);
-        did_work = true;
         if (!whole) continue;
         im.scatter_residual = im.sweep.residual;
       }
       im.last_sweep_ms = ms_since(tw);
-      did_work = true;
       im.scatter_iterations += ran;
       report.scatter_iterations += ran;
       report.work_units += ran;
