@@ -4,6 +4,7 @@
 // Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--shared-data DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
 //          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
+//          [--modes all|shadow]  (shadow: only ao+shadow and the hard-shadow lines)
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
 // disk-out-ref (the hexahedra of ../shared/data/disk_out_ref.ex2, --shared-data DIR),
@@ -18,11 +19,13 @@
 //   ao-object:  the same, precomputed on a pre-illumination volume and sampled at the points,
 //   ao-image:   the same cones traced at every segment end of every ray (scenes up to 200k tets;
 //               --image-space off leaves it out: it costs seconds per frame),
-//   ao+shadow:  ao-object times a 2-degree cone towards a directional light,
-// and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones.
+//   ao+shadow:  ao-object times a 2-degree cone towards a directional light per point, its gap
+//               integrated exactly (GapDepth), as the in-situ path lights it,
+// and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones
+// (the shadow's rays from the point itself).
 // Hard shadows, against the image lit by the exact single-ray transmittance to the light:
-//   shadow-cone:          a 2-degree cone (splits 1) as long as the bounds' diagonal (default
-//                         gap 3 sigma0: with no gap the blur around the point darkens it more),
+//   shadow-cone:          a 2-degree cone (splits 1) as long as the bounds' diagonal, its gap of
+//                         3 sigma0 integrated exactly through the tets (GapDepth),
 //   shadow-light-volume:  the two-level light volume (level 0 at 128) solved to convergence,
 //   shadow-light-volume-level0:  its level 0 alone, interpolated to the points,
 //   shadow-cone-image / shadow-light-volume-image: against the exact shadow per sample (every
@@ -244,6 +247,8 @@ int run(int argc, char** argv) {
                                                             : pr::PyramidQuantity::step_opacity;
   const std::string gpu_option = pb::option(argc, argv, "gpu", "on");
   const std::string image_space = pb::option(argc, argv, "image-space", "on");
+  const std::string modes = pb::option(argc, argv, "modes", "all");
+  penumbra::require(modes == "all" || modes == "shadow", "pnb_bench_occlusion: --modes " + modes + "; expected all or shadow");
   penumbra::require(image_space == "on" || image_space == "off",
                     "pnb_bench_occlusion: --image-space " + image_space + "; expected on or off");
   penumbra::require(gpu_option == "on" || gpu_option == "off", "pnb_bench_occlusion: --gpu " + gpu_option + "; expected on or off");
@@ -297,6 +302,10 @@ int run(int argc, char** argv) {
   pr::Image mc_ao_image, mc_both_image;
   const pr::ConeTracer ao3(pyramid, cone(kAperture, 3, false));
   const pr::ConeTracer shadow1(pyramid, cone(kShadowAperture, 1, true));
+  // Shadows are the light that reaches x: the cones' gap is integrated exactly through the tets
+  // (per transfer function, like the pyramid), and the Monte Carlo rays start at the point.
+  pr::GapDepth gap_depth(s.mesh);
+  gap_depth.set_field(s.scalars, s.tf);
   if (with_mc) {
     pb::Stopwatch mc_clock;
     const pr::ConeMonteCarlo mc(s.mesh, s.scalars, s.tf);
@@ -307,7 +316,7 @@ int run(int argc, char** argv) {
         for (std::size_t p = p0; p < p1; ++p) {
           const Vec3d& x = mesh.points[p];
           const pr::MonteCarloResult r =
-              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, shadow1.gap(), shadow1.length(), mc_tolerance,
+              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, 0.0, shadow1.length(), mc_tolerance,
                                         32, mc_max_rays, p)
                      : mc.transmittance(x, eye - x, kAperture, ao3.gap(), ao3.length(), mc_tolerance, 32, mc_max_rays, p);
           out[p] = static_cast<float>(r.transmittance);
@@ -338,7 +347,7 @@ int run(int argc, char** argv) {
     line["mode"] = mode;
     line["splits"] = splits;
     line["aperture_deg"] = mode.rfind("ao", 0) == 0 ? kAperture : 0.0;
-    line["shadow_aperture_deg"] = mode == "ao+shadow" || mode == "shadow-cone" ? kShadowAperture : 0.0;
+    line["shadow_aperture_deg"] = mode == "ao+shadow" || mode.rfind("shadow-cone", 0) == 0 ? kShadowAperture : 0.0;
     line["alpha"] = alpha;
     line["section_weight"] = weight_name;
     line["pyramid_quantity"] = pyramid_name;
@@ -380,13 +389,17 @@ int run(int argc, char** argv) {
   pr::Image image;
   // Emission-absorption: the frame every lit mode is compared with (speed), and how far the
   // unlit image is from the Monte Carlo one (what occlusion adds).
-  auto t = timed([&] { return caster.render(s.scalars, s.tf, s.camera); }, image);
-  emit("emission-absorption", 0, t, image, with_mc ? &mc_ao_image : nullptr);
+  std::vector<double> t;
+  if (modes == "all") {
+    t = timed([&] { return caster.render(s.scalars, s.tf, s.camera); }, image);
+    emit("emission-absorption", 0, t, image, with_mc ? &mc_ao_image : nullptr);
+  }
 
   // The CPU's L and frame per mode and splits, for the GPU lines' agreement.
   std::map<std::string, std::pair<std::vector<float>, pr::Image>> cpu_result;
   auto key = [](const std::string& mode, int splits) { return mode + "/" + std::to_string(splits); };
   for (int splits : {1, 3, 7}) {
+    if (modes != "all") break;
     const pr::ConeTracer tracer(pyramid, cone(kAperture, splits, false));
     auto ao = [&](const Vec3d& x) { return pr::directional_occlusion(tracer, x, eye); };
     std::vector<float> field;
@@ -415,16 +428,17 @@ int run(int argc, char** argv) {
       emit("ao-image", splits, t, image, with_mc ? &mc_ao_image : nullptr);
     }
   }
+  // As the in-situ path lights it: occlusion through the pre-illumination volume, shadows per
+  // point (a shadow edge would blur over a volume cell).
   t = timed(
       [&] {
-        const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res, [&](const Vec3d& x) {
-          return pr::directional_occlusion(ao3, x, eye) * pr::shadow_transmittance(shadow1, sun, x);
-        });
-        return render_with(pr::grey_light_rgb(pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return vol.sample(x); })));
+        const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res,
+                                            [&](const Vec3d& x) { return pr::directional_occlusion(ao3, x, eye); });
+        return render_with(pr::grey_light_rgb(pr::evaluate_at_points(
+            mesh, [&](const Vec3d& x) { return vol.sample(x) * pr::shadow_transmittance(shadow1, sun, x, gap_depth); })));
       },
       image);
   emit("ao+shadow", 3, t, image, with_mc ? &mc_both_image : nullptr);
-
   // Hard shadows: a narrow cone and the light volume against the exact transmittance.
   const pr::Light light{pr::Light::Kind::directional, sun.vector, {1, 1, 1}};
   pr::Image hard_image;
@@ -440,7 +454,7 @@ int run(int argc, char** argv) {
   {
     std::vector<float> field;
     t = timed([&] {
-      field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x); });
+      field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x, gap_depth); });
       return render_with(pr::grey_light_rgb(field));
     }, image);
     emit("shadow-cone", 1, t, image, with_mc ? &hard_image : nullptr);
@@ -478,7 +492,7 @@ int run(int argc, char** argv) {
     per_sample.shading.light_at = [&](const Vec3d& x, double rgb[3]) { rgb[0] = rgb[1] = rgb[2] = exact_shadow(x); };
     const pr::Image exact_image = caster.render(s.scalars, s.tf, s.camera, per_sample);
     per_sample.shading.light_at = [&](const Vec3d& x, double rgb[3]) {
-      rgb[0] = rgb[1] = rgb[2] = pr::shadow_transmittance(shadow_cone, sun, x);
+      rgb[0] = rgb[1] = rgb[2] = pr::shadow_transmittance(shadow_cone, sun, x, gap_depth);
     };
     t = timed([&] { return caster.render(s.scalars, s.tf, s.camera, per_sample); }, image);
     emit("shadow-cone-image", 1, t, image, &exact_image);
@@ -542,6 +556,7 @@ int run(int argc, char** argv) {
   };
   const pr::ConeTarget towards_eye = pr::ConeTarget::towards_eye(eye);
   for (int splits : {1, 3, 7}) {
+    if (modes != "all") break;
     const pr::GpuConeTracer tracer(gpu_pyramid, cone(kAperture, splits, false));
     for (int volume : {0, preillum_res}) {
       std::vector<float> field;
@@ -556,7 +571,14 @@ int run(int argc, char** argv) {
     const pr::GpuConeTracer tracer(gpu_pyramid, narrow);
     std::vector<float> field;
     t = timed([&] {
-      field = traced([&] { return tracer.at_mesh_points(pr::ConeTarget::towards_light(sun), s.mesh); });
+      field = traced([&] {
+        // The gap's exact depth on the CPU, as the in-situ path does.
+        std::vector<float> cone = tracer.at_mesh_points(pr::ConeTarget::towards_light(sun), s.mesh);
+        const std::vector<float> gap = pr::evaluate_at_points(
+            mesh, [&](const Vec3d& x) { return pr::gap_transmittance(shadow_cone, sun, x, gap_depth); });
+        for (std::size_t p = 0; p < cone.size(); ++p) cone[p] *= gap[p];
+        return cone;
+      });
       return gpu_frame(field);
     }, image);
     emit_gpu("shadow-cone", 1, t, field, image, with_mc ? &hard_image : nullptr);

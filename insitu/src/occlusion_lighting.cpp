@@ -43,16 +43,24 @@ void OcclusionLighting::set_field(const std::vector<float>& scalars, const rende
   render::ConeOptions so = render::ConeOptions::shadow(m_config.shadow_aperture_deg, m_config.shadow_splits);
   so.attenuation = m_config.attenuation;
   m_shadow_tracer = std::make_unique<render::ConeTracer>(m_pyramid, so);
+  if (!m_gap_depth) m_gap_depth = std::make_unique<render::GapDepth>(m_mesh);
+  m_gap_depth->set_field(scalars, tf);
   if (m_config.space == OcclusionSpace::image) return;  // evaluated per sample instead
   if (m_gpu) m_gpu_shadow = std::make_unique<render::GpuConeTracer>(*m_gpu_pyramid, so);
   const render::ConeTracer& tracer = *m_shadow_tracer;
+  const render::GapDepth& gap = *m_gap_depth;
   m_shadow_rgb.assign(3 * m_mesh->points.size(), 0.0f);
   for (const render::Light& light : m_lights) {
     const render::ShadowLight sl = shadow_light(light);
-    const std::vector<float> t =
-        m_gpu_shadow ? m_gpu_shadow->at_mesh_points(render::ConeTarget::towards_light(sl), m_mesh)
-                     : render::evaluate_at_points(
-                           *m_mesh, [&](const Vec3d& x) { return render::shadow_transmittance(tracer, sl, x); });
+    std::vector<float> t;
+    if (m_gpu_shadow) {
+      t = m_gpu_shadow->at_mesh_points(render::ConeTarget::towards_light(sl), m_mesh);
+      const std::vector<float> through_gap = render::evaluate_at_points(
+          *m_mesh, [&](const Vec3d& x) { return render::gap_transmittance(tracer, sl, x, gap); });
+      for (std::size_t p = 0; p < t.size(); ++p) t[p] *= through_gap[p];
+    } else {
+      t = render::evaluate_at_points(*m_mesh, [&](const Vec3d& x) { return render::shadow_transmittance(tracer, sl, x, gap); });
+    }
     for (std::size_t p = 0; p < t.size(); ++p)
       for (int c = 0; c < 3; ++c) m_shadow_rgb[3 * p + c] += static_cast<float>(t[p] * light.color[static_cast<std::size_t>(c)]);
   }
@@ -87,7 +95,7 @@ std::function<void(const Vec3d&, double[3])> OcclusionLighting::light_at(const V
     if (m_shadow_tracer) {
       light[0] = light[1] = light[2] = 0;
       for (const render::Light& l : m_lights) {
-        const double t = render::shadow_transmittance(*m_shadow_tracer, shadow_light(l), x);
+        const double t = render::shadow_transmittance(*m_shadow_tracer, shadow_light(l), x, *m_gap_depth);
         for (int c = 0; c < 3; ++c) light[c] += t * l.color[static_cast<std::size_t>(c)];
       }
     }

@@ -14,12 +14,13 @@ namespace penumbra::insitu {
 
 /// Per field: the extinction pyramid of the current step (rebuilt by set_field) and, per camera,
 /// L(x) = AO(x, eye) x sum_k colour_k shadow_k(x) at every mesh point (AO alone without lights or
-/// with shadows off), for the ray caster's light-field shading.
+/// with shadows off), for the ray caster's light-field shading. Shadows are the light that
+/// reaches x: each shadow cone's gap h0 is integrated exactly through the tets (render::GapDepth).
 ///
 /// With a GPU device (backend gpu) the cones are traced on it: the pyramid is resampled and
 /// filtered on the CPU, uploaded once per step, and every per-point field (and in space "volume"
-/// the pre-illumination grid) is one dispatch per eye or light. light_at() (image space, CPU ray
-/// caster only) always traces on the CPU.
+/// the pre-illumination grid) is one dispatch per eye or light; the shadows' gaps are integrated
+/// on the CPU. light_at() (image space, CPU ray caster only) always traces on the CPU.
 class OcclusionLighting {
 public:
   OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh, const OcclusionConfig& config,
@@ -33,13 +34,14 @@ public:
   std::function<void(const Vec3d&, double[3])> light_at(const Vec3d& eye) const;
 
 private:
-  double shadow_rgb_at(const Vec3d& x, int channel) const;
   std::shared_ptr<const render::TetMesh> m_mesh;
   OcclusionConfig m_config;
   std::vector<render::Light> m_lights;
   render::ExtinctionResampler m_resampler;
   render::ExtinctionPyramid m_pyramid;
   std::unique_ptr<render::ConeTracer> m_ao_tracer, m_shadow_tracer;
+  // Exact depth over the shadow cones' gap (built on the first step with shadows: a BVH per mesh).
+  std::unique_ptr<render::GapDepth> m_gap_depth;
   // The GPU path (null without a device); declared after m_pyramid, which they point to.
   std::shared_ptr<render::GpuDevice> m_gpu;
   std::unique_ptr<render::GpuExtinctionPyramid> m_gpu_pyramid;

@@ -84,20 +84,17 @@ void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, con
   parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) {
       const auto& tv = mesh.tets[t];
-      const Vec3d& p0 = mesh.points[static_cast<std::size_t>(tv[0])];
-      const Vec3d e1 = mesh.points[static_cast<std::size_t>(tv[1])] - p0;
-      const Vec3d e2 = mesh.points[static_cast<std::size_t>(tv[2])] - p0;
-      const Vec3d e3 = mesh.points[static_cast<std::size_t>(tv[3])] - p0;
-      const double s0 = scalars[static_cast<std::size_t>(tv[0])];
-      const double d1 = scalars[static_cast<std::size_t>(tv[1])] - s0;
-      const double d2 = scalars[static_cast<std::size_t>(tv[2])] - s0;
-      const double d3 = scalars[static_cast<std::size_t>(tv[3])] - s0;
-      // Solve e_i . g = d_i by the adjugate: g = (d1 e2xe3 + d2 e3xe1 + d3 e1xe2) / det.
-      const double inv = 1.0 / dot(e1, cross(e2, e3));
-      const Vec3d g = (cross(e2, e3) * d1 + cross(e3, e1) * d2 + cross(e1, e2) * d3) * inv;
-      const bool nan = std::isnan(s0) || std::isnan(d1) || std::isnan(d2) || std::isnan(d3);
+      Vec3d q[4];
+      double v[4];
+      bool nan = false;
+      for (int c = 0; c < 4; ++c) {
+        q[c] = mesh.points[static_cast<std::size_t>(tv[c])];
+        v[c] = scalars[static_cast<std::size_t>(tv[c])];
+        nan = nan || std::isnan(v[c]);
+      }
+      const Vec3d g = linear_gradient(q, v);
       linear[static_cast<std::size_t>(topology.field_slot[t])] =
-          nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{s0 - dot(g, p0), g};
+          nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{v[0] - dot(g, q[0]), g};
     }
   });
 }

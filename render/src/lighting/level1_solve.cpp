@@ -64,10 +64,7 @@ double box_path_length(const Bounds& box, const Vec3d& x, const Light& light) {
 }
 
 double transverse_change(const Vec3d p[4], const double value[4], const Vec3d& u) {
-  const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
-  const double det = dot(e1, cross(e2, e3));
-  const Vec3d g = (cross(e2, e3) * (value[1] - value[0]) + cross(e3, e1) * (value[2] - value[0]) +
-                   cross(e1, e2) * (value[3] - value[0])) / det;
+  const Vec3d g = linear_gradient(p, value);
   const Vec3d across = g - u * dot(g, u);
   double size = 0.0;
   for (int a = 0; a < 4; ++a)

@@ -54,6 +54,14 @@ inline std::array<double, 4> barycentric(const TetMesh& mesh, std::int32_t t, co
           signed_volume6(q[0], q[1], p, q[3]) * inv, signed_volume6(q[0], q[1], q[2], p) * inv};
 }
 
+/// Gradient of the linear function with values v[k] at the corners p[k] of a tet: solves
+/// e_i . g = v_i - v_0 (e_i = p_i - p_0) by the adjugate.
+inline Vec3d linear_gradient(const Vec3d p[4], const double v[4]) {
+  const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0], e3 = p[3] - p[0];
+  const double inv = 1.0 / dot(e1, cross(e2, e3));
+  return (cross(e2, e3) * (v[1] - v[0]) + cross(e3, e1) * (v[2] - v[0]) + cross(e1, e2) * (v[3] - v[0])) * inv;
+}
+
 /// Barycentric weights clamped to >= 0 and renormalised: interpolation stays a convex
 /// combination even for a point a rounding error outside the tet.
 inline std::array<double, 4> convex_weights(std::array<double, 4> w) {

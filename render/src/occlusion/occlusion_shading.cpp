@@ -1,4 +1,5 @@
 // render/src/occlusion/occlusion_shading.cpp -- cones towards the eye and towards lights
+#include <algorithm>
 #include <cmath>
 
 #include "penumbra/render/occlusion.h"
@@ -24,6 +25,17 @@ double shadow_transmittance(const ConeTracer& tracer, const ShadowLight& light, 
   }
   // Nothing beyond the light occludes it: the cone stops there.
   return tracer.transmittance(x, to_light, dist);
+}
+
+double gap_transmittance(const ConeTracer& tracer, const ShadowLight& light, const Vec3d& x, const GapDepth& gap) {
+  if (light.kind == ShadowLight::Kind::directional) return std::exp(-gap.depth(x, -light.vector, tracer.gap()));
+  const Vec3d to_light = light.vector - x;
+  return std::exp(-gap.depth(x, to_light, std::min(tracer.gap(), length(to_light))));
+}
+
+double shadow_transmittance(const ConeTracer& tracer, const ShadowLight& light, const Vec3d& x, const GapDepth& gap) {
+  const double cone = shadow_transmittance(tracer, light, x);
+  return cone > 0 ? cone * gap_transmittance(tracer, light, x, gap) : cone;
 }
 
 }  // namespace penumbra::render
