@@ -13,7 +13,7 @@ layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
 
 struct LevelInfo {
   ivec4 dims_offset;  // node counts, first value in `tau`
-  vec4 lo;            // first node, relative to the origin
+  vec4 lo;            // first node, relative to the origin; w = 1: 0 beyond the nodes themselves
   vec4 inv_spacing;
 };
 struct ScheduleEntry {
@@ -67,6 +67,7 @@ float fetch(int l, vec3 p) {
   if (!(u.x > -1.0 && u.y > -1.0 && u.z > -1.0 && u.x < float(dims.x) && u.y < float(dims.y) &&
         u.z < float(dims.z)))
     return 0.0;  // also rejects NaN
+  if (li.lo.w > 0.5 && (any(lessThan(u, vec3(0.0))) || any(greaterThan(u, vec3(dims - 1))))) return 0.0;
   vec3 fl = floor(u);
   ivec3 i = ivec3(fl);
   vec3 f = u - fl;

@@ -23,6 +23,7 @@ uniform int u_axis;
 uniform int u_stride;    // output node o reads input stride * o + offset + k
 uniform int u_offset;
 uniform int u_radius;
+uniform int u_halve_ends;  // 1: the input's first and last node along u_axis count half
 uniform float u_cell;    // the cell length l of the opacity conversion
 uniform float u_max_opacity;
 
@@ -63,7 +64,8 @@ void main() {
   float sum = 0.0;
   for (int k = k0; k <= k1; ++k) {
     c[u_axis] = centre + k;
-    sum += taps[k + u_radius] * src[c.x + u_in_nx * (c.y + u_in_ny * c.z)];
+    float end = u_halve_ends != 0 && (c[u_axis] == 0 || c[u_axis] == n_in - 1) ? 0.5 : 1.0;
+    sum += end * taps[k + u_radius] * src[c.x + u_in_nx * (c.y + u_in_ny * c.z)];
   }
   dst[u_dst_offset + n] = sum;
 }

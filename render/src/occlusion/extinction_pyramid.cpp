@@ -6,6 +6,16 @@
 // on every level, so P is too). Filtering is separable; taps beyond the input are zeros, and each
 // kernel is normalised by its full sum, so values near the bounds fall off like the true
 // convolution of tau with 0 outside (never clamp-to-edge, which would invent extinction there).
+//
+// Mass at the bounds. The grid's first and last nodes along each axis lie on the mesh bounds, and
+// the mesh ends there: such a node stands for half a cell of medium, not a whole one. Filtered
+// at full weight it puts tau h / 2 of extra optical depth on every ray that leaves through a
+// face of the bounds, and trilinear interpolation between it and the zero padding does the same
+// within a spacing beyond the face. So the filters weigh those nodes by 1/2 per axis (separably:
+// each pass halves the ends of its own axis), and the unfiltered grid reads 0 beyond its nodes.
+// Measured on bench/occlusion's hexblock-hole (a box with a hole, 128^3; mean transmittance error
+// of a single ray to a directional light through the unfiltered grid against the exact one):
+// -0.0076 -> -0.0015 at interior points; a 2 deg shadow cone's mean |error| 0.0103 -> 0.0055.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,9 +30,10 @@ namespace penumbra::render {
 namespace {
 
 // One separable pass along `axis`: out[o] = sum_k w[k] in[stride * o + offset + k] (zero beyond
-// the input). The other two axes keep their sizes.
+// the input). The other two axes keep their sizes. halve_ends: the input's first and last node
+// along the axis count half (see "Mass at the bounds" above).
 std::vector<float> filter_axis(const std::vector<float>& in, const std::array<int, 3>& in_dims, int axis, int out_count,
-                               int stride, int offset, double sigma_nodes, std::array<int, 3>& out_dims) {
+                               int stride, int offset, double sigma_nodes, bool halve_ends, std::array<int, 3>& out_dims) {
   int radius = 0;
   const std::vector<double> w = detail::gaussian_taps(sigma_nodes, radius);
   out_dims = in_dims;
@@ -42,8 +53,11 @@ std::vector<float> filter_axis(const std::vector<float>& in, const std::array<in
         const int centre = stride * o + offset;
         const int k0 = std::max(-radius, -centre), k1 = std::min(radius, n_in - 1 - centre);
         double sum = 0;
-        for (int k = k0; k <= k1; ++k)
-          sum += w[static_cast<std::size_t>(k + radius)] * in[in_base + static_cast<std::size_t>(centre + k) * in_step[axis]];
+        for (int k = k0; k <= k1; ++k) {
+          const int i = centre + k;
+          const double end = halve_ends && (i == 0 || i == n_in - 1) ? 0.5 : 1.0;
+          sum += end * w[static_cast<std::size_t>(k + radius)] * in[in_base + static_cast<std::size_t>(i) * in_step[axis]];
+        }
         out[out_base + static_cast<std::size_t>(o) * out_step[axis]] = static_cast<float>(sum);
       }
     }
@@ -75,6 +89,7 @@ double PyramidLevel::sample(const Vec3d& p) const {
   for (int a = 0; a < 3; ++a) {
     const double u = (p[a] - lo[a]) / spacing[a];
     if (!(u > -1.0 && u < dims[a])) return 0.0;  // also rejects NaN
+    if (empty_beyond_nodes && (u < 0.0 || u > dims[a] - 1)) return 0.0;
     const double fl = std::floor(u);
     i[a] = static_cast<int>(fl);
     f[a] = u - fl;
@@ -146,7 +161,7 @@ ExtinctionPyramid::ExtinctionPyramid(const ExtinctionGrid& grid, const PyramidOp
       for (int a = 0; a < 3; ++a) {
         std::array<int, 3> out_dims{};
         data = filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], stride, -pad[a] * stride, stride * sigma_nodes0[a],
-                           out_dims);
+                           true, out_dims);
         dims = out_dims;
       }
       make_level(l, dims, to_extinction(data, thickness));
@@ -163,9 +178,9 @@ ExtinctionPyramid::ExtinctionPyramid(const ExtinctionGrid& grid, const PyramidOp
     for (int l = 0; more_levels(); ++l) {
       for (int a = 0; a < 3; ++a) {
         std::array<int, 3> out_dims{};
-        data = l == 0 ? filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], 1, -pad[a], sigma_nodes0[a], out_dims)
+        data = l == 0 ? filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], 1, -pad[a], sigma_nodes0[a], true, out_dims)
                       : filter_axis(data, dims, a, interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a],
-                                    out_dims);
+                                    false, out_dims);
         dims = out_dims;
       }
       make_level(l, dims, opacity ? to_extinction(data, cell) : data);
@@ -176,6 +191,7 @@ ExtinctionPyramid::ExtinctionPyramid(const ExtinctionGrid& grid, const PyramidOp
   m_fine.spacing = grid.spacing;
   m_fine.sigma = grid.mean_spacing() / std::sqrt(6.0);
   m_fine.tau = grid.tau;
+  m_fine.empty_beyond_nodes = true;
   m_build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

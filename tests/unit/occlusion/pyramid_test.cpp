@@ -43,15 +43,26 @@ TEST(ExtinctionPyramid, SigmaDoublesPerLevel) {
 
 TEST(ExtinctionPyramid, ZeroPaddingKeepsMassAtTheBoundary) {
   // tau = 1 in the whole grid: clamp-to-edge would invent extinction beyond the bounds; zero
-  // padding spreads exactly the grid's mass (less the < 0.3% Gaussian tail past 3 sigma).
+  // padding spreads exactly the medium's mass, tau times the volume of the bounds (less the < 0.3%
+  // Gaussian tail past 3 sigma). At full weight the nodes on the bounds would add half a cell on
+  // every face: 33^3 / 32^3 = 1.097.
   const ExtinctionGrid g = grid(33, 0, 1, [](const Vec3d&) { return 1.0; });
   const ExtinctionPyramid p(g, {PyramidQuantity::extinction});
-  const double want = 33.0 * 33 * 33 * std::pow(1.0 / 32, 3);
+  const double want = 1.0;
   for (int l = 0; l < p.levels(); ++l) EXPECT_NEAR(mass(p.level(l)), want, 0.01 * want) << "level " << l;
   // Beyond 4 sigma outside the bounds nothing is left; at the centre the value is 1.
   EXPECT_LT(p.level(0).sample({-4 * p.sigma0(), 0.5, 0.5}), 1e-3);
   EXPECT_NEAR(p.level(0).sample({0.5, 0.5, 0.5}), 1.0, 1e-5);
   EXPECT_GT(p.build_ms(), 0.0);
+  // The unfiltered grid ends at its outermost nodes (the bounds): a ray leaving through a face
+  // reads exactly the medium inside.
+  const double h = 1.0 / 32;
+  EXPECT_EQ(p.fine().sample({1.0, 0.5, 0.5}), 1.0);
+  EXPECT_EQ(p.fine().sample({1.0 + 0.25 * h, 0.5, 0.5}), 0.0);
+  EXPECT_EQ(p.fine().sample({0.5, -0.25 * h, 0.5}), 0.0);
+  double depth = 0;
+  for (double x = 0.5 + h / 16; x < 1.5; x += h / 8) depth += p.fine().sample({x, 0.5, 0.5}) * h / 8;
+  EXPECT_NEAR(depth, 0.5, 1e-9);
 }
 
 TEST(ExtinctionPyramid, CheckerboardAveragesExtinction) {

@@ -6,7 +6,8 @@
 // Pipeline.
 //  1. ExtinctionGrid: the transfer function's extinction tau(s) (per world unit) at the nodes of a
 //     regular grid over the mesh bounds; nodes in no tet (outside, holes) have tau = 0.
-//  2. ExtinctionPyramid: level 0 is the grid (extinction, or opacity per cell converted back
+//  2. ExtinctionPyramid: level 0 is the grid (its nodes on the bounds at half weight, the half cell
+//     of medium they stand for; extinction, or opacity per cell converted back
 //     afterwards, as in the thesis; opt-in, PyramidQuantity::step_opacity) convolved with a
 //     Gaussian of sigma0 (default: the mean grid spacing, sec. 4.2); level l+1 is level l
 //     convolved with a Gaussian of sqrt(3) sigma_l, so sigma_{l+1} = 2 sigma_l, and kept at every
@@ -183,6 +184,9 @@ struct PyramidLevel {
   Vec3d lo, spacing;
   double sigma = 0;
   std::vector<float> tau;
+  /// 0 outside the box of the nodes themselves, instead of interpolating toward zero padding one
+  /// spacing beyond them (see ExtinctionPyramid::fine()).
+  bool empty_beyond_nodes = false;
   /// Trilinear interpolation; 0 beyond the level's nodes.
   double sample(const Vec3d& p) const;
 };
@@ -203,7 +207,8 @@ public:
   double build_ms() const { return m_build_ms; }
   /// The resampled grid itself, unfiltered (extinction; `sigma` is the per-axis standard deviation
   /// of trilinear interpolation, mean spacing / sqrt 6): what sections narrower than level 0's
-  /// filter read (occlusion.h, "Below level 0").
+  /// filter read (occlusion.h, "Below level 0"). 0 beyond its outermost nodes, which lie on the
+  /// mesh bounds (PyramidLevel::empty_beyond_nodes).
   const PyramidLevel& fine() const { return m_fine; }
 
 private:

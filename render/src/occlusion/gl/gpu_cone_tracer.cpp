@@ -96,7 +96,8 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
       in.inv_spacing[a] = static_cast<float>(1.0 / lev.spacing[a]);
     }
     in.dims_offset[3] = static_cast<GLint>(offset);
-    in.lo[3] = in.inv_spacing[3] = 0;
+    in.lo[3] = lev.empty_beyond_nodes ? 1.0f : 0.0f;
+    in.inv_spacing[3] = 0;
     offset += lev.tau.size();
   }
   CurrentContext current(dev());

@@ -1,7 +1,8 @@
 // render/src/occlusion/gl/gpu_pyramid_build.cpp -- the extinction pyramid filtered on the device
 // (render/shaders/pyramid_filter.comp), level by level as ExtinctionPyramid's constructor does:
 // the same lattices (margin of ceil(3 sigma0 / spacing) nodes, every second node per level), the
-// same normalised Gaussian taps, zeros beyond the input, the same opacity conversion. Three scratch
+// same normalised Gaussian taps, zeros beyond the input, the grid's boundary nodes at half weight,
+// the same opacity conversion. Three scratch
 // buffers rotate through the three separable passes of a level; every level's extinction lands in
 // one buffer laid out as GpuExtinctionPyramid's.
 // PyramidQuantity::step_opacity filters every level from the grid (kept in its own buffer) at
@@ -42,6 +43,7 @@ std::size_t volume(const std::array<int, 3>& d) { return static_cast<std::size_t
 struct Pass {
   int axis, count, stride, offset;
   double sigma_nodes;
+  bool halve_ends;  ///< the input is the grid: its first and last node along the axis count half
 };
 
 }  // namespace
@@ -83,11 +85,11 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
         if (l > 0) interior[a] = (interior[a] + 1) / 2;
         if (step) {
           const int stride = 1 << l;
-          p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], stride, -pad[a] * stride, stride * sigma_nodes0[a]};
+          p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], stride, -pad[a] * stride, stride * sigma_nodes0[a], true};
         } else if (l == 0) {
-          p[static_cast<std::size_t>(a)] = {a, grid.dims[static_cast<std::size_t>(a)] + 2 * pad[a], 1, -pad[a], sigma_nodes0[a]};
+          p[static_cast<std::size_t>(a)] = {a, grid.dims[static_cast<std::size_t>(a)] + 2 * pad[a], 1, -pad[a], sigma_nodes0[a], true};
         } else {
-          p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a]};
+          p[static_cast<std::size_t>(a)] = {a, interior[a] + 1 + 2 * pad[a], 2, -pad[a], std::sqrt(3.0) * sigma_nodes0[a], false};
         }
         level.dims[static_cast<std::size_t>(a)] = p[static_cast<std::size_t>(a)].count;
         level.lo[a] = grid.lo[a] - pad[a] * level.spacing[a];
@@ -177,6 +179,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
         u1i("u_stride", p.stride);
         u1i("u_offset", p.offset);
         u1i("u_radius", radius);
+        u1i("u_halve_ends", p.halve_ends ? 1 : 0);
         run(0, buffers[k].name, buffers[(k + 1) % 3].name, volume(dims), 0);
       }
       // The level's extinction (converted back from opacity) into the levels buffer.
