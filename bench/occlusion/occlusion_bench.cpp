@@ -4,6 +4,7 @@
 // Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--shared-data DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
 //          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
+//          [--modes all|shadow]  (shadow: only ao+shadow and the hard-shadow lines)
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
 // disk-out-ref (the hexahedra of ../shared/data/disk_out_ref.ex2, --shared-data DIR),
@@ -18,11 +19,13 @@
 //   ao-object:  the same, precomputed on a pre-illumination volume and sampled at the points,
 //   ao-image:   the same cones traced at every segment end of every ray (scenes up to 200k tets;
 //               --image-space off leaves it out: it costs seconds per frame),
-//   ao+shadow:  ao-object times a 2-degree cone towards a directional light,
-// and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones.
+//   ao+shadow:  ao-object times a 2-degree cone towards a directional light per point, its gap
+//               integrated exactly (GapDepth), as the in-situ path lights it,
+// and the Monte Carlo image uses converged cosine-weighted rays per point for the same cones
+// (the shadow's rays from the point itself).
 // Hard shadows, against the image lit by the exact single-ray transmittance to the light:
-//   shadow-cone:          a 2-degree cone (splits 1) as long as the bounds' diagonal (default
-//                         gap 3 sigma0: with no gap the blur around the point darkens it more),
+//   shadow-cone:          a 2-degree cone (splits 1) as long as the bounds' diagonal, its gap of
+//                         3 sigma0 integrated exactly through the tets (GapDepth),
 //   shadow-light-volume:  the two-level light volume (level 0 at 128) solved to convergence,
 //   shadow-light-volume-level0:  its level 0 alone, interpolated to the points,
 //   shadow-cone-image / shadow-light-volume-image: against the exact shadow per sample (every
@@ -44,10 +47,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -128,10 +129,7 @@ Setup hexblock(int n, int width, int height, bool plate) {
       s.scalars[p] = static_cast<float>(0.5 + 0.3 * std::sin(5 * x.x) * std::cos(4 * x.y) + 0.2 * std::cos(6 * x.z));
     }
   }
-  if (std::getenv("PNB_CONST_TF")) {
-    s.tf.colors = {{0.0, 0.9, 0.9, 0.9}};
-    s.tf.opacities = {{0.0, std::atof(std::getenv("PNB_CONST_TF"))}};
-  } else if (plate) {
+  if (plate) {
     s.tf.colors = {{0.0, 0.9, 0.9, 0.9}, {0.5, 0.8, 0.85, 1.0}, {1.0, 0.9, 0.5, 0.2}};
     s.tf.opacities = {{0.0, 0.0}, {0.5, 1.5}, {0.9, 200.0}};
   } else {
@@ -257,15 +255,12 @@ int run(int argc, char** argv) {
   penumbra::require(weight_name == "mean" || weight_name == "thesis",
                     "pnb_bench_occlusion: --weight " + weight_name + "; expected mean or thesis");
   const pr::SectionWeight weight = weight_name == "mean" ? pr::SectionWeight::mean : pr::SectionWeight::thesis;
-  double sigma0_for_gap = 0;
   // Occlusion cones as configured (alpha and the section weight apply to every cone).
   auto cone = [&](double aperture, int splits, bool shadow) {
     pr::ConeOptions o = shadow ? pr::ConeOptions::shadow(aperture, splits) : pr::ConeOptions::occlusion(aperture, splits);
     // alpha calibrates the occlusion cones' darkening (Jensen bias of wide sections); narrow
     // shadow cones keep alpha = 1.
     if (!shadow) o.attenuation = alpha;
-    if (shadow && std::getenv("PNB_SHADOW_GAP")) o.gap = std::atof(std::getenv("PNB_SHADOW_GAP"));
-    if (shadow && std::getenv("PNB_SHADOW_GAP_S")) o.gap = std::atof(std::getenv("PNB_SHADOW_GAP_S")) * sigma0_for_gap;
     o.weight = weight;
     return o;
   };
@@ -288,7 +283,6 @@ int run(int argc, char** argv) {
   const pr::ExtinctionGrid grid = pr::resample_extinction(mesh, s.scalars, s.tf, grid_res);
   const double resample_ms = resample_clock.ms();
   const pr::ExtinctionPyramid pyramid(grid, pyramid_options);
-  sigma0_for_gap = pyramid.sigma0();
 
   pr::RenderOptions lit;
   lit.shading.model = pr::LightingModel::light_volume;
@@ -308,6 +302,10 @@ int run(int argc, char** argv) {
   pr::Image mc_ao_image, mc_both_image;
   const pr::ConeTracer ao3(pyramid, cone(kAperture, 3, false));
   const pr::ConeTracer shadow1(pyramid, cone(kShadowAperture, 1, true));
+  // Shadows are the light that reaches x: the cones' gap is integrated exactly through the tets
+  // (per transfer function, like the pyramid), and the Monte Carlo rays start at the point.
+  pr::GapDepth gap_depth(s.mesh);
+  gap_depth.set_field(s.scalars, s.tf);
   if (with_mc) {
     pb::Stopwatch mc_clock;
     const pr::ConeMonteCarlo mc(s.mesh, s.scalars, s.tf);
@@ -318,7 +316,7 @@ int run(int argc, char** argv) {
         for (std::size_t p = p0; p < p1; ++p) {
           const Vec3d& x = mesh.points[p];
           const pr::MonteCarloResult r =
-              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, shadow1.gap(), shadow1.length(), mc_tolerance,
+              shadow ? mc.transmittance(x, -sun.vector, kShadowAperture, 0.0, shadow1.length(), mc_tolerance,
                                         32, mc_max_rays, p)
                      : mc.transmittance(x, eye - x, kAperture, ao3.gap(), ao3.length(), mc_tolerance, 32, mc_max_rays, p);
           out[p] = static_cast<float>(r.transmittance);
@@ -349,7 +347,7 @@ int run(int argc, char** argv) {
     line["mode"] = mode;
     line["splits"] = splits;
     line["aperture_deg"] = mode.rfind("ao", 0) == 0 ? kAperture : 0.0;
-    line["shadow_aperture_deg"] = mode == "ao+shadow" || mode == "shadow-cone" ? kShadowAperture : 0.0;
+    line["shadow_aperture_deg"] = mode == "ao+shadow" || mode.rfind("shadow-cone", 0) == 0 ? kShadowAperture : 0.0;
     line["alpha"] = alpha;
     line["section_weight"] = weight_name;
     line["pyramid_quantity"] = pyramid_name;
@@ -430,70 +428,17 @@ int run(int argc, char** argv) {
       emit("ao-image", splits, t, image, with_mc ? &mc_ao_image : nullptr);
     }
   }
+  // As the in-situ path lights it: occlusion through the pre-illumination volume, shadows per
+  // point (a shadow edge would blur over a volume cell).
   t = timed(
       [&] {
-        const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res, [&](const Vec3d& x) {
-          return pr::directional_occlusion(ao3, x, eye) * pr::shadow_transmittance(shadow1, sun, x);
-        });
-        return render_with(pr::grey_light_rgb(pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return vol.sample(x); })));
+        const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res,
+                                            [&](const Vec3d& x) { return pr::directional_occlusion(ao3, x, eye); });
+        return render_with(pr::grey_light_rgb(pr::evaluate_at_points(
+            mesh, [&](const Vec3d& x) { return vol.sample(x) * pr::shadow_transmittance(shadow1, sun, x, gap_depth); })));
       },
       image);
   emit("ao+shadow", 3, t, image, with_mc ? &mc_both_image : nullptr);
-  if (std::getenv("PNB_SHADOW_DIAG") && with_mc) {
-    for (int res : {64, 128}) {
-      const pr::PreIlluminationVolume vol(pyramid.bounds(), res, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow1, sun, x); });
-      double ep = 0, ev = 0, sp = 0, sv = 0;
-      for (std::size_t p = 0; p < mesh.points.size(); ++p) {
-        const Vec3d& x = mesh.points[p];
-        const double a = pr::shadow_transmittance(shadow1, sun, x) - mc_shadow[p], b = vol.sample(x) - mc_shadow[p];
-        ep += std::fabs(a); ev += std::fabs(b); sp += a; sv += b;
-      }
-      const double n = mesh.points.size();
-      std::fprintf(stderr, "%s shadow vs MC: per point |%.4f| %+.4f ; volume %d |%.4f| %+.4f\n", s.name.c_str(), ep / n, sp / n, res, ev / n, sv / n);
-    }
-    std::vector<float> both(mc_ao.size());
-    const pr::PreIlluminationVolume vol(pyramid.bounds(), preillum_res, [&](const Vec3d& x) { return pr::directional_occlusion(ao3, x, eye); });
-    for (std::size_t p = 0; p < both.size(); ++p) both[p] = vol.sample(mesh.points[p]) * pr::shadow_transmittance(shadow1, sun, mesh.points[p]);
-    emit("ao-object+shadow-points", 3, {0.0}, render_with(pr::grey_light_rgb(both)), &mc_both_image);
-    for (std::size_t p = 0; p < both.size(); ++p) both[p] = mc_ao[p] * pr::shadow_transmittance(shadow1, sun, mesh.points[p]);
-    emit("mcao+shadow-points", 3, {0.0}, render_with(pr::grey_light_rgb(both)), &mc_both_image);
-    for (std::size_t p = 0; p < both.size(); ++p) both[p] = vol.sample(mesh.points[p]) * mc_shadow[p];
-    emit("ao-object+mcshadow", 3, {0.0}, render_with(pr::grey_light_rgb(both)), &mc_both_image);
-  }
-
-  if (std::getenv("PNB_AO_IMAGE_DIAG") && with_mc) {
-    const int sz = std::atoi(std::getenv("PNB_AO_IMAGE_DIAG"));
-    pr::Camera small = pr::Camera::look_at(s.camera.eye, s.camera.target, s.camera.up, s.camera.fov_y_deg, sz, sz);
-    const pr::ConeMonteCarlo mc(s.mesh, s.scalars, s.tf);
-    for (int splits : {3, 7}) {
-    const pr::ConeTracer tracer(pyramid, cone(kAperture, splits, false));
-    pr::RenderOptions o = lit;
-    std::atomic<long> calls{0};
-    o.shading.light_at = [&](const Vec3d& x, double rgb[3]) {
-      const std::uint64_t seed = std::hash<double>()(x.x * 1e6 + x.y * 1e3 + x.z) | 1;
-      ++calls;
-      rgb[0] = rgb[1] = rgb[2] = mc.transmittance(x, eye - x, kAperture, ao3.gap(), ao3.length(), mc_tolerance, 32, mc_max_rays, seed).transmittance;
-    };
-    pb::Stopwatch c;
-    const pr::Image mc_sample = caster.render(s.scalars, s.tf, small, o);
-    std::fprintf(stderr, "mc per sample: %ld calls %.0f ms\n", calls.load(), c.ms());
-    o.shading.light_at = [&](const Vec3d& x, double rgb[3]) { rgb[0] = rgb[1] = rgb[2] = pr::directional_occlusion(tracer, x, eye); };
-    const pr::Image cone_sample = caster.render(s.scalars, s.tf, small, o);
-    pr::RenderOptions q = lit;
-    const std::vector<float> mc_rgb = pr::grey_light_rgb(mc_ao);
-    q.shading.light_rgb = &mc_rgb;
-    const pr::Image mc_point = caster.render(s.scalars, s.tf, small, q);
-    const std::vector<float> cone_rgb = pr::grey_light_rgb(pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::directional_occlusion(tracer, x, eye); }));
-    q.shading.light_rgb = &cone_rgb;
-    const pr::Image cone_point = caster.render(s.scalars, s.tf, small, q);
-    auto pr_ = [&](const char* what, const pr::Image& a, const pr::Image& b) { const ImageDiff d = compare(a, b, s.background); std::fprintf(stderr, "splits %d %s: dE %.3f p95 %.3f\n", splits, what, d.delta_e_mean, d.delta_e_p95); };
-    pr_("cone-sample vs mc-sample", cone_sample, mc_sample);
-    pr_("cone-sample vs mc-point", cone_sample, mc_point);
-    pr_("cone-point vs mc-point", cone_point, mc_point);
-    pr_("mc-point vs mc-sample", mc_point, mc_sample);
-    }
-    return 0;
-  }
   // Hard shadows: a narrow cone and the light volume against the exact transmittance.
   const pr::Light light{pr::Light::Kind::directional, sun.vector, {1, 1, 1}};
   pr::Image hard_image;
@@ -509,43 +454,11 @@ int run(int argc, char** argv) {
   {
     std::vector<float> field;
     t = timed([&] {
-      field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x); });
+      field = pr::evaluate_at_points(mesh, [&](const Vec3d& x) { return pr::shadow_transmittance(shadow_cone, sun, x, gap_depth); });
       return render_with(pr::grey_light_rgb(field));
     }, image);
     emit("shadow-cone", 1, t, image, with_mc ? &hard_image : nullptr);
     cpu_result[key("shadow-cone", 1)] = {field, image};
-  }
-  if (std::getenv("PNB_SHADOW_DIAG") && with_mc) {
-    pr::ConeOptions n0 = narrow; n0.gap = 0.0;
-    const pr::ConeTracer cone0(pyramid, n0);
-    const pr::PyramidLevel& fine = pyramid.fine();
-    const Vec3d dir = -sun.vector * (1.0 / std::sqrt(sun.vector.x*sun.vector.x+sun.vector.y*sun.vector.y+sun.vector.z*sun.vector.z));
-    const double hstep = grid.mean_spacing() / 8;
-    auto march = [&](const Vec3d& x, double start, const pr::PyramidLevel& lev) {
-      double depth = 0; const double L = pyramid.bounds().diagonal();
-      for (double d = start + hstep / 2; d < L; d += hstep) depth += lev.sample(x + dir * d) * hstep;
-      return std::exp(-depth);
-    };
-    double e[6] = {0}, sgn[6] = {0};
-    const char* names[6] = {"hybrid-cone", "cone-gap0", "fine-march0", "hybrid-march", "level0-march0", "lv?"};
-    std::size_t n = 0;
-    for (std::size_t p = 0; p < mesh.points.size(); p += 3) {
-      const Vec3d& x = mesh.points[p];
-      const double te = exact_shadow(x);
-      const double g = shadow_cone.gap();
-      const double near = reference->optical_depth(s.scalars, s.tf, light, x) - reference->optical_depth(s.scalars, s.tf, light, x + dir * g);
-      const double v[5] = {pr::shadow_transmittance(shadow_cone, sun, x) * std::exp(-near), pr::shadow_transmittance(cone0, sun, x),
-                           march(x, 0, fine), march(x, g, fine) * std::exp(-near), march(x, 0, pyramid.level(0))};
-      auto on = [](double c) { return std::fabs(c) < 1e-9 || std::fabs(c - 1) < 1e-9; };
-      auto wall = [](double c) { return std::fabs(c - 8.0 / 24) < 1e-9 || std::fabs(c - 16.0 / 24) < 1e-9; };
-      const bool bnd = on(x.x) || on(x.y) || on(x.z) || ((wall(x.x) && x.y > 0.33 && x.y < 0.67) || (wall(x.y) && x.x > 0.33 && x.x < 0.67));
-      if (std::getenv("PNB_DIAG_BND") && bnd != (std::atoi(std::getenv("PNB_DIAG_BND")) == 1)) continue;
-      for (int k = 0; k < 5; ++k) { e[k] += std::fabs(v[k] - te); sgn[k] += v[k] - te; }
-      if (std::getenv("PNB_DIAG_WORST") && v[2] - te < -0.1) std::fprintf(stderr, "worst %.4f %.4f %.4f  exact %.4f fine %.4f\n", x.x, x.y, x.z, te, v[2]);
-      ++n;
-    }
-    for (int k = 0; k < 5; ++k) std::fprintf(stderr, "%s %s mean|dT| %.4f mean dT %+.4f\n", s.name.c_str(), names[k], e[k] / n, sgn[k] / n);
-    std::fprintf(stderr, "gap %.4f sigma0 %.4f h %.4f\n", shadow_cone.gap(), pyramid.sigma0(), grid.mean_spacing());
   }
   pr::LightVolumeOptions lv_options;
   lv_options.level0_resolution = 128;
@@ -579,7 +492,7 @@ int run(int argc, char** argv) {
     per_sample.shading.light_at = [&](const Vec3d& x, double rgb[3]) { rgb[0] = rgb[1] = rgb[2] = exact_shadow(x); };
     const pr::Image exact_image = caster.render(s.scalars, s.tf, s.camera, per_sample);
     per_sample.shading.light_at = [&](const Vec3d& x, double rgb[3]) {
-      rgb[0] = rgb[1] = rgb[2] = pr::shadow_transmittance(shadow_cone, sun, x);
+      rgb[0] = rgb[1] = rgb[2] = pr::shadow_transmittance(shadow_cone, sun, x, gap_depth);
     };
     t = timed([&] { return caster.render(s.scalars, s.tf, s.camera, per_sample); }, image);
     emit("shadow-cone-image", 1, t, image, &exact_image);
@@ -658,7 +571,14 @@ int run(int argc, char** argv) {
     const pr::GpuConeTracer tracer(gpu_pyramid, narrow);
     std::vector<float> field;
     t = timed([&] {
-      field = traced([&] { return tracer.at_mesh_points(pr::ConeTarget::towards_light(sun), s.mesh); });
+      field = traced([&] {
+        // The gap's exact depth on the CPU, as the in-situ path does.
+        std::vector<float> cone = tracer.at_mesh_points(pr::ConeTarget::towards_light(sun), s.mesh);
+        const std::vector<float> gap = pr::evaluate_at_points(
+            mesh, [&](const Vec3d& x) { return pr::gap_transmittance(shadow_cone, sun, x, gap_depth); });
+        for (std::size_t p = 0; p < cone.size(); ++p) cone[p] *= gap[p];
+        return cone;
+      });
       return gpu_frame(field);
     }, image);
     emit_gpu("shadow-cone", 1, t, field, image, with_mc ? &hard_image : nullptr);
