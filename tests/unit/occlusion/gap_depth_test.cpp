@@ -33,6 +33,9 @@ TEST(GapDepth, HomogeneousBlockGivesTauTimesTheLengthInside) {
   EXPECT_EQ(gap.depth({0.5, 0.5, 0.5}, {1, 0, 0}, 0.0), 0.0);
   EXPECT_EQ(gap.depth({0.5, 0.5, 0.5}, {1, 0, 0}, -1.0), 0.0);
   EXPECT_EQ(gap.depth({0.5, 0.5, 0.5}, {std::numeric_limits<double>::quiet_NaN(), 0, 0}, 0.3), 0.0);
+  EXPECT_EQ(gap.depth({std::numeric_limits<double>::quiet_NaN(), 0.5, 0.5}, {1, 0, 0}, 0.3), 0.0);
+  // An unbounded segment stops where the mesh does.
+  EXPECT_NEAR(gap.depth({0.5, 0.5, 0.5}, {0, 0, 1}, std::numeric_limits<double>::infinity()), 1.5, 1e-12);
 }
 
 TEST(GapDepth, LinearFieldThroughAPiecewiseLinearTransferFunctionIsIntegratedExactly) {
