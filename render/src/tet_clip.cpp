@@ -38,6 +38,13 @@ bool clip_to_tet(const TetMesh& mesh, std::int32_t t, const ClipLine& r, double 
   return true;
 }
 
+Bvh tet_bvh(const TetMesh& mesh) {
+  std::vector<Bounds> boxes(mesh.tets.size());
+  for (std::size_t t = 0; t < boxes.size(); ++t)
+    for (int k = 0; k < 4; ++k) boxes[t].extend(mesh.points[static_cast<std::size_t>(mesh.tets[t][k])]);
+  return Bvh(boxes, 1e-9 * std::max(mesh.bounds.diagonal(), 1e-300), 4);
+}
+
 double scalar_in_tet(const TetMesh& mesh, const std::vector<float>& s, std::int32_t t, const Vec3d& x) {
   const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
   Vec3d p[4];

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "bvh.h"
 #include "penumbra/core/vec3.h"
 #include "penumbra/render/tet_mesh.h"
 
@@ -19,6 +20,10 @@ struct ClipLine {
 /// a single point. A line lying exactly in a face plane is displaced by (eps u + eps^2 v), so of
 /// the tets sharing that face (or edge) exactly one contains it.
 bool clip_to_tet(const TetMesh& mesh, std::int32_t t, const ClipLine& line, double t_max, double& lo, double& hi);
+
+/// A BVH over the tets' boxes (padded by 1e-9 of the bounds' diagonal, so a line grazing a face
+/// is never lost to rounding), for "every tet along a line" before clip_to_tet.
+Bvh tet_bvh(const TetMesh& mesh);
 
 /// The scalar at x inside tet t by barycentric coordinates (NaN when a vertex is NaN).
 double scalar_in_tet(const TetMesh& mesh, const std::vector<float>& scalars, std::int32_t t, const Vec3d& x);

@@ -25,10 +25,7 @@ struct GapDepth::Impl {
 GapDepth::GapDepth(std::shared_ptr<const TetMesh> mesh) : m_impl(std::make_unique<Impl>()) {
   require(mesh != nullptr, "GapDepth: mesh is null");
   require(!mesh->tets.empty(), "GapDepth: the mesh has no tets");
-  std::vector<Bounds> boxes(mesh->tets.size());
-  for (std::size_t t = 0; t < boxes.size(); ++t)
-    for (int k = 0; k < 4; ++k) boxes[t].extend(mesh->points[static_cast<std::size_t>(mesh->tets[t][k])]);
-  m_impl->bvh = detail::Bvh(boxes, 1e-9 * std::max(mesh->bounds.diagonal(), 1e-300), 4);
+  m_impl->bvh = detail::tet_bvh(*mesh);
   m_impl->mesh = std::move(mesh);
 }
 
