@@ -1,9 +1,10 @@
 // render/shaders/light_level1.comp -- a semi-Lagrangian pass of level 1 (level1_solve.cpp)
 //
 // u_mode 0: one slab group of the vertex order. Each invocation traces back from its vertex by
-// its step through the tets (trace_segment: the same start-tet choice, canonical face planes,
-// exit rule and exact optical depth), takes rho at the departure point from its tet's corners
-// (interpolate_light) or level 0 where the walk left the mesh, and writes next[v]. A corner in an
+// its step through the tets (level1_walk.cpp: the same start, edge-sign exit rule with the same
+// tie rule and turned retries, and exact optical depth), takes rho at the departure point from
+// its tet's corners (interpolate_light) or level 0 where the walk left the mesh, and writes
+// next[v]. A corner in an
 // earlier group is read from next (updated in this pass), any other from rho1 (the previous
 // pass): what the CPU's ordered Gauss-Seidel pass reads.
 // u_mode 1: publishes the pass (rho1 = next for every ordered vertex) and takes the largest change.
@@ -13,10 +14,11 @@
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer Points { vec4 points[]; };  // xyz, w = longest incident edge
-layout(std430, binding = 1) readonly buffer Tets { ivec4 tets[]; };
-layout(std430, binding = 2) readonly buffer Neighbors { ivec4 neighbors[]; };
-layout(std430, binding = 3) readonly buffer TetField { vec4 tet_field[]; };  // gradient, scalar at vertex 0
-layout(std430, binding = 4) readonly buffer Incidence { int incidence[]; };  // np + 1 offsets, then 4 tet + local
+layout(std430, binding = 1) readonly buffer Tets { ivec4 tets[]; };  // walk records (level1_mesh.h)
+layout(std430, binding = 2) readonly buffer Neighbors { ivec4 neighbors[]; };  // record << 2 | face, -1
+layout(std430, binding = 3) readonly buffer PointScalars { float scalars[]; };
+// np + 1 offsets, then per star entry: record << 2 | local index, the opposite face's vertices
+layout(std430, binding = 4) readonly buffer Incidence { int incidence[]; };
 layout(std430, binding = 5) readonly buffer Params { float params[]; };  // extinction table, occluder boxes
 layout(std430, binding = 6) readonly buffer Mask { uint mask_bytes[]; };  // level 0, 4 bytes per uint
 layout(std430, binding = 7) readonly buffer Rho0 { float rho0[]; };
@@ -46,12 +48,10 @@ uniform int u_occluders;      // boxes (lo.xyz, hi.xyz) after the table
 uniform int u_occluder_offset;
 
 const int kMaxMoves = 200000;
-const float kParallel = 1e-12;
 const float kGeometricDepth = 1.3862943611198906;
 const float kLinearDepth = 2.772588722239781;
 const uint kOutside = 0u;
 const int kInside = 0, kLeftMesh = 1, kLost = 2;
-const int kFaceVertices[12] = int[12](1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1);
 
 bool is_nan_bits(float x) { return (floatBitsToUint(x) & 0x7fffffffu) > 0x7f800000u; }
 float flush_small(float v) { return v < 1e-30 ? 0.0 : v; }
@@ -71,7 +71,7 @@ int piece(float s) {  // number of breakpoints <= s (std::upper_bound)
 }
 float tau_at(int p, float s) { return max(0.0, ta(p) + tb(p) * s); }
 float integral(float s0, float s1, float len) {
-  if (!(len > 0.0)) return 0.0;
+  if (!(len > 0.0) || is_nan_bits(s0) || is_nan_bits(s1)) return 0.0;
   int p0 = piece(s0), p1 = piece(s1);
   if (p0 == p1) return 0.5 * (tau_at(p0, s0) + tau_at(p0, s1)) * len;
   int stp = p1 > p0 ? 1 : -1;
@@ -109,33 +109,6 @@ bool segment_meets_box(vec3 p0, vec3 p1, vec3 lo, vec3 hi) {
     if (t0 > t1) return false;
   }
   return true;
-}
-
-float volume6(vec3 a, vec3 b, vec3 c, vec3 d) { return dot(b - a, cross(c - a, d - a)); }
-
-vec4 convex_weights(int t, vec3 p) {
-  ivec4 tv = tets[t];
-  vec3 q0 = point_at(tv.x), q1 = point_at(tv.y), q2 = point_at(tv.z), q3 = point_at(tv.w);
-  float inv = 1.0 / volume6(q0, q1, q2, q3);
-  vec4 w = vec4(volume6(p, q1, q2, q3), volume6(q0, p, q2, q3), volume6(q0, q1, p, q3), volume6(q0, q1, q2, p)) * inv;
-  w = max(w, vec4(0.0));
-  float sum = w.x + w.y + w.z + w.w;
-  if (!(sum > 0.0)) return vec4(0.25);
-  return w / sum;
-}
-
-// Outward face normal (not unit) and a point of face j, from the face's vertices sorted by id,
-// so that both tets of a face get the same plane.
-void face_plane(int t, int j, out vec3 n, out vec3 a) {
-  ivec4 tv = tets[t];
-  int f0 = tv[kFaceVertices[3 * j]], f1 = tv[kFaceVertices[3 * j + 1]], f2 = tv[kFaceVertices[3 * j + 2]];
-  if (f0 > f1) { int x = f0; f0 = f1; f1 = x; }
-  if (f1 > f2) { int x = f1; f1 = f2; f2 = x; }
-  if (f0 > f1) { int x = f0; f0 = f1; f1 = x; }
-  a = point_at(f0);
-  precise vec3 nn = cross(point_at(f1) - a, point_at(f2) - a);
-  if (dot(nn, point_at(tv[j]) - a) > 0.0) nn = -nn;
-  n = nn;
 }
 
 float box_path_length(vec3 x) {
@@ -199,95 +172,199 @@ float sample_level0(vec3 p, bool prefer_outside) {
   return any_outside ? sum_out / wsum_out : sum / wsum;
 }
 
-// ---- the walk (trace_segment) ----
-struct Trace {
-  int kind;
-  int tet;
-  vec3 end;
-  float depth;
-};
+// ---- the walk (level1_walk.cpp, ray_frame.h) ----
+const int kFaceVertices[12] = int[12](1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1);
+const int kAbc[12] = int[12](1, 3, 2, 0, 2, 3, 1, 0, 3, 0, 1, 2);
+const int kExitX[8] = int[8](1, 1, 2, 2, 3, 1, 3, 1);
 
-float segment_depth(int t, vec3 x, vec3 d, float t0, float t1) {
-  if (!(t1 > t0)) return 0.0;
-  vec4 fld = tet_field[t];
-  if (is_nan_bits(fld.w)) return 0.0;
-  float s_x = fld.w + dot(fld.xyz, x - point_at(tets[t].x));
-  float slope = dot(fld.xyz, d);
-  return integral(s_x + slope * t0, s_x + slope * t1, t1 - t0);
+// The ray's frame (RayFrame: Duff et al.) and the quarter turn of the plane across it.
+vec3 g_origin, g_u, g_v, g_d;
+int g_quarter;
+
+void set_frame(vec3 o, vec3 d) {
+  g_origin = o;
+  g_d = d;
+  float sgn = (floatBitsToUint(d.z) & 0x80000000u) != 0u ? -1.0 : 1.0;  // copysign(1, d.z)
+  float a = -1.0 / (sgn + d.z);
+  float b = d.x * d.y * a;
+  g_u = vec3(1.0 + sgn * d.x * d.x * a, sgn * b, -sgn * d.x);
+  g_v = vec3(b, sgn + d.y * d.y * a, -d.y);
 }
 
-Trace trace_segment(int v, vec3 x, vec3 d, float seg_length, bool use_cache) {
-  int tet = -1;
-  int local = 0;
-  float best = -3.0e38;
+// Ray-plane coordinates and depth of point id; `precise` so that every use of a point and of
+// an edge computes the very same value (the walk's consistency rests on it).
+vec3 at(int id) {
+  precise vec3 r = points[id].xyz - g_origin;
+  precise float x = dot(r, g_u);
+  precise float y = dot(r, g_v);
+  precise float z = dot(r, g_d);
+  if (g_quarter == 1) return vec3(-y, x, z);
+  if (g_quarter == 2) return vec3(-x, -y, z);
+  if (g_quarter == 3) return vec3(y, -x, z);
+  return vec3(x, y, z);
+}
+
+float edge_value(vec3 a, int ia, vec3 b, int ib) {
+  bool fwd = ia <= ib;
+  vec3 p = fwd ? a : b, q = fwd ? b : a;
+  precise float v = p.x * q.y - p.y * q.x;
+  return fwd ? v : -v;
+}
+
+bool edge_positive(float value, vec3 a, int ia, vec3 b, int ib) {
+  if (value > 0.0) return true;
+  if (value < 0.0) return false;
+  bool fwd = ia <= ib;
+  vec3 p = fwd ? a : b, q = fwd ? b : a;
+  float dy = q.y - p.y, dx = q.x - p.x;
+  int s = dy != 0.0 ? (dy > 0.0 ? -1 : 1) : (dx != 0.0 ? (dx > 0.0 ? 1 : -1) : 0);
+  return (fwd ? s : -s) > 0;
+}
+
+struct Trace {
+  int kind;
+  int tet;      // walk record holding the end, or the last one walked
+  float end;    // ray parameter of the departure point, or where the walk left the mesh
+  float depth;
+  vec4 w;       // the departure point's weights in tet
+  bool grazed;  // could not start only by the tie rule
+};
+
+// A crossing: face points, their weights, depth and scalar.
+ivec3 c_id;
+vec3 c_mu;
+float c_t, c_s;
+
+void cross_face(ivec3 id, vec3 qa, vec3 qb, vec3 qc, vec3 w, float t_in, float s_in) {
+  c_id = id;
+  float sum = w.x + w.y + w.z;
+  if (!(sum > 0.0)) {
+    c_mu = vec3(0.0);
+    c_t = t_in;
+    c_s = s_in;
+    return;
+  }
+  c_mu = w / sum;
+  c_t = max(c_mu.x * qa.z + c_mu.y * qb.z + c_mu.z * qc.z, t_in);
+  c_s = c_mu.x * scalars[id.x] + c_mu.y * scalars[id.y] + c_mu.z * scalars[id.z];
+}
+
+// Whether the ray from v leaves through the face (outward order) opposite v; sets the crossing.
+bool leaves_through(ivec3 f, int v, inout bool grazed) {
+  vec3 q0 = at(f.x), q1 = at(f.y), q2 = at(f.z);
+  float e0 = edge_value(q1, f.y, q2, f.z), e1 = edge_value(q2, f.z, q0, f.x), e2 = edge_value(q0, f.x, q1, f.y);
+  bool positive = edge_positive(e0, q1, f.y, q2, f.z) && edge_positive(e1, q2, f.z, q0, f.x) &&
+                  edge_positive(e2, q0, f.x, q1, f.y);
+  if (!positive) {
+    grazed = grazed || (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0);
+    return false;
+  }
+  cross_face(f, q0, q1, q2, max(vec3(e0, e1, e2), vec3(0.0)), 0.0, scalars[v]);
+  return true;
+}
+
+Trace walk(int v, float seg_length, bool use_cache) {
+  Trace tr = Trace(kLost, -1, 0.0, 0.0, vec4(0.0), false);
   int cache = use_cache ? start_tet[v] : -1;
-  if (cache == -2) return Trace(kLeftMesh, -1, x, 0.0);
+  if (cache == -2) {
+    tr.kind = kLeftMesh;
+    return tr;
+  }
+  int slot = -1, k = -1;
   if (cache >= 0) {
-    tet = cache;
-    ivec4 tv = tets[tet];
-    while (local < 3 && tv[local] != v) ++local;
-    best = 1.0;
+    slot = cache >> 2;
+    k = cache & 3;
+    ivec4 tv = tets[slot];
+    bool unused = false;
+    leaves_through(ivec3(tv[kFaceVertices[3 * k]], tv[kFaceVertices[3 * k + 1]], tv[kFaceVertices[3 * k + 2]]), v, unused);
   } else {
     int s_end = incidence[v + 1];
-    for (int s = incidence[v]; s < s_end; ++s) {
-      int entry = incidence[s];
-      int t = entry >> 2, k = entry & 3;
-      ivec4 tv = tets[t];
-      vec3 e[3];
-      int n = 0;
-      for (int j = 0; j < 4; ++j)
-        if (j != k) e[n++] = point_at(tv[j]) - x;
-      vec3 c0 = cross(e[1], e[2]), c1 = cross(e[2], e[0]), c2 = cross(e[0], e[1]);
-      float sgn = dot(e[0], c0) > 0.0 ? 1.0 : -1.0;
-      float score = min(sgn * dot(d, c0) / length(c0), min(sgn * dot(d, c1) / length(c1), sgn * dot(d, c2) / length(c2)));
-      if (score > best) {
-        best = score;
-        tet = t;
-        local = k;
-        if (best > 1e-3) break;
+    for (int s = incidence[v]; s < s_end; s += 4) {
+      if (leaves_through(ivec3(incidence[s + 1], incidence[s + 2], incidence[s + 3]), v, tr.grazed)) {
+        slot = incidence[s] >> 2;
+        k = incidence[s] & 3;
+        break;
       }
     }
-    // float32: a direction along a boundary face scores a rounding error either side of 0.
-    if (tet < 0 || best < -1e-6) {
-      if (use_cache) start_tet[v] = -2;
-      return Trace(kLeftMesh, tet, x, 0.0);
+    if (slot >= 0) tr.grazed = false;
+    if (use_cache) start_tet[v] = slot < 0 ? -2 : ((slot << 2) | k);
+    if (slot < 0) {
+      tr.kind = kLeftMesh;
+      return tr;
     }
-    if (use_cache) start_tet[v] = tet;
   }
-
-  uint excluded = 0xFu & ~(1u << local);
-  float t_in = 0.0, depth = 0.0;
+  // The segment in the current tet runs from the entry crossing to c_*; v enters the first.
+  ivec3 in_id = ivec3(v);
+  vec3 in_mu = vec3(1.0, 0.0, 0.0);
+  float in_t = 0.0, in_s = scalars[v];
+  int nxt = neighbors[slot][k];
   for (int move = 0; move < kMaxMoves; ++move) {
-    float t_out = 3.0e38;
-    int exit_face = -1;
-    for (int j = 0; j < 4; ++j) {
-      if ((excluded & (1u << j)) != 0u) continue;
-      vec3 fn, fa;
-      face_plane(tet, j, fn, fa);
-      float den = dot(fn, d);
-      if (den <= 0.0 || den * den <= kParallel * kParallel * dot(fn, fn)) continue;
-      float tj = dot(fn, fa - x) / den;
-      if (tj < t_out) {
-        t_out = tj;
-        exit_face = j;
+    if (c_t >= seg_length) {
+      ivec4 tv = tets[slot];
+      float f = c_t > in_t ? (seg_length - in_t) / (c_t - in_t) : 0.0;
+      vec4 w = vec4(0.0);
+      for (int j = 0; j < 4; ++j) {
+        for (int c = 0; c < 3; ++c) {
+          if (in_id[c] == tv[j]) w[j] += (1.0 - f) * in_mu[c];
+          if (c_id[c] == tv[j]) w[j] += f * c_mu[c];
+        }
       }
+      w = max(w, vec4(0.0));
+      float sum = w.x + w.y + w.z + w.w;
+      tr.w = sum > 0.0 ? w / sum : vec4(0.25);
+      tr.depth += integral(in_s, in_s + f * (c_s - in_s), seg_length - in_t);
+      tr.kind = kInside;
+      tr.tet = slot;
+      tr.end = seg_length;
+      return tr;
     }
-    t_out = max(t_out, t_in);
-    if (t_out >= seg_length || exit_face < 0) {
-      depth += segment_depth(tet, x, d, t_in, seg_length);
-      return Trace(kInside, tet, x + d * seg_length, depth);
+    tr.depth += integral(in_s, c_s, c_t - in_t);
+    if (nxt < 0) {
+      tr.kind = kLeftMesh;
+      tr.tet = slot;
+      tr.end = c_t;
+      return tr;
     }
-    depth += segment_depth(tet, x, d, t_in, t_out);
-    int nxt = neighbors[tet][exit_face];
-    if (nxt < 0) return Trace(kLeftMesh, tet, x + d * t_out, depth);
-    excluded = 0u;
-    ivec4 nb = neighbors[nxt];
-    for (int f = 0; f < 4; ++f)
-      if (nb[f] == tet) excluded |= 1u << f;
-    tet = nxt;
-    t_in = t_out;
+    slot = nxt >> 2;
+    k = nxt & 3;
+    in_id = c_id;
+    in_mu = c_mu;
+    in_t = c_t;
+    in_s = c_s;
+    ivec4 tv = tets[slot];
+    int id[4] = int[4](tv[k], tv[kAbc[3 * k]], tv[kAbc[3 * k + 1]], tv[kAbc[3 * k + 2]]);  // D, A, B, C
+    vec3 q[4] = vec3[4](at(id[0]), at(id[1]), at(id[2]), at(id[3]));
+    float e_d[4];
+    e_d[0] = 0.0;
+    int pattern = 0;
+    for (int j = 1; j < 4; ++j) {
+      e_d[j] = edge_value(q[0], id[0], q[j], id[j]);
+      if (edge_positive(e_d[j], q[0], id[0], q[j], id[j])) pattern |= 1 << (j - 1);
+    }
+    int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;
+    nxt = neighbors[slot][kAbc[3 * k + 5 - x - y]];
+    vec3 w3 = max(vec3(edge_value(q[x], id[x], q[y], id[y]), -e_d[y], e_d[x]), vec3(0.0));
+    cross_face(ivec3(id[0], id[x], id[y]), q[0], q[x], q[y], w3, in_t, in_s);
   }
-  return Trace(kLost, tet, x + d * seg_length, depth);
+  tr.kind = kLost;
+  tr.tet = slot;
+  tr.end = seg_length;
+  return tr;
+}
+
+// The walk, retried with the plane across the ray turned when it could not start only by the
+// tie rule (walk_any_side).
+Trace walk_to_light(int v, vec3 x, vec3 d, float seg_length, bool use_cache) {
+  set_frame(x, d);
+  g_quarter = 0;
+  Trace first = walk(v, seg_length, use_cache);
+  if (!first.grazed) return first;
+  if (use_cache) start_tet[v] = -1;
+  for (g_quarter = 1; g_quarter <= 3; ++g_quarter) {
+    Trace t = walk(v, seg_length, false);
+    if (t.tet >= 0) return t;
+  }
+  return first;
 }
 
 // ---- departure value (interpolate_light) ----
@@ -333,8 +410,8 @@ bool interpolate_light(vec4 w, float rho[4], float path[4], float path_d, vec3 c
   return true;
 }
 
-bool departure_value(Trace tr, out float value) {
-  vec4 w = convex_weights(tr.tet, tr.end);
+bool departure_value(Trace tr, vec3 end, out float value) {
+  vec4 w = tr.w;
   ivec4 tv = tets[tr.tet];
   float values[4], path[4];
   vec3 corner[4];
@@ -343,8 +420,8 @@ bool departure_value(Trace tr, out float value) {
     corner[k] = point_at(tv[k]);
     path[k] = box_path_length(corner[k]);
   }
-  vec3 u = u_point != 0 ? normalize(tr.end - u_light) : u_light;
-  return interpolate_light(w, values, path, box_path_length(tr.end), corner, u, value);
+  vec3 u = u_point != 0 ? normalize(end - u_light) : u_light;
+  return interpolate_light(w, values, path, box_path_length(end), corner, u, value);
 }
 
 float update(int v) {
@@ -364,23 +441,27 @@ float update(int v) {
       reaches_light = true;
     }
   }
-  Trace tr = trace_segment(v, x, d, len, true);
+  Trace tr = walk_to_light(v, x, d, len, true);
+  vec3 end = x + d * tr.end;
   float upstream = 0.0;
   bool walk_on = false;
   if (tr.kind == kInside && !reaches_light) {
-    walk_on = !departure_value(tr, upstream);
-    if (walk_on) tr = trace_segment(v, x, d, box_path_length(x) * (1.0 + 1e-5) + 1e-30, false);
+    walk_on = !departure_value(tr, end, upstream);
+    if (walk_on) {
+      tr = walk_to_light(v, x, d, box_path_length(x) * (1.0 + 1e-5) + 1e-30, false);
+      end = x + d * tr.end;
+    }
   }
   if (tr.kind == kInside) {
     if (reaches_light || walk_on) upstream = 1.0;
   } else if (tr.kind == kLeftMesh) {
-    upstream = sample_level0(tr.end, true);
+    upstream = sample_level0(end, true);
   } else {
     atomicAdd(counters[1], 1u);
-    upstream = sample_level0(tr.end, false);
+    upstream = sample_level0(end, false);
   }
   for (int b = 0; b < u_occluders; ++b)
-    if (segment_meets_box(x, tr.end, occ_lo(b), occ_hi(b))) return 0.0;
+    if (segment_meets_box(x, end, occ_lo(b), occ_hi(b))) return 0.0;
   return flush_small(upstream * exp(-u_sigma_a * tr.depth));
 }
 

@@ -38,10 +38,8 @@ using detail::kFaceVertices;
 using detail::ShadeContext;
 using detail::WalkTet;
 
-// Entered through face k, the other vertices A, B, C are ordered so that the three candidate
-// exit faces, listed outward, are (D,A,B), (D,B,C), (D,C,A) with D the vertex k: (k,A,B,C) is an
-// odd permutation of (0,1,2,3), like (3,0,1,2).
-constexpr int kAbc[4][3] = {{1, 3, 2}, {0, 2, 3}, {1, 0, 3}, {0, 1, 2}};
+using detail::kAbc;
+using detail::kExitX;
 
 // A boundary face where the ray enters the mesh.
 struct Entry {
@@ -109,22 +107,7 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   const std::vector<std::int32_t> order = detail::morton_order(tm);
   std::vector<std::int32_t> rank(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
-  tets.resize(tm.tets.size());
-  parallel_for(tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const auto t = static_cast<std::size_t>(order[i]);
-      for (int k = 0; k < 4; ++k) {
-        tets[i].v[k] = tm.tets[t][k];
-        const std::int32_t n = tm.neighbors[t][k];
-        tets[i].next[k] = -1;
-        if (n < 0) continue;
-        // The shared face's index in the neighbour: the face whose neighbour is t.
-        for (int j = 0; j < 4; ++j)
-          if (tm.neighbors[static_cast<std::size_t>(n)][j] == static_cast<std::int32_t>(t))
-            tets[i].next[k] = (rank[static_cast<std::size_t>(n)] << 2) | j;
-      }
-    }
-  });
+  tets = detail::walk_tets(tm, order);
   triangles.reserve(tm.boundary.size());
   std::vector<Bounds> boxes;
   boxes.reserve(tm.boundary.size());
@@ -230,12 +213,6 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
       e_d[j] = edge_value(q[0], id[0], q[j], id[j]);
       pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
     }
-    // Exit through (D,A,B) iff e(D,A) > 0 >= e(D,B), and cyclically; exactly one holds for any
-    // consistent sign pattern (the entry face's own edges are known to be on the inside), so a
-    // table replaces the hard-to-predict branches. Patterns 0 and 7 cannot occur with
-    // consistent signs (the ray would have to pass exactly through D, which the tie rule
-    // excludes); they fall back to (D,A,B).
-    constexpr int kExitX[8] = {1, 1, 2, 2, 3, 1, 3, 1};
     const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
     const int opposite = abc[5 - x - y];  // local index of the vertex not on the exit face
     // Start fetching the next tet now so that the integration below hides the memory latency.

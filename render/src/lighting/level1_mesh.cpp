@@ -26,13 +26,6 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
       tet_local[slot] = static_cast<std::int8_t>(k);
     }
 
-  face_inward.assign(nt, 0);
-  parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t)
-      for (int j = 0; j < 4; ++j)
-        if (canonical_face_inward(mesh, static_cast<std::int32_t>(t), j)) face_inward[t] |= static_cast<std::uint8_t>(1u << j);
-  });
-
   // Edge neighbours: the other three vertices of each incident tet, deduplicated per point.
   edge_offsets.assign(np + 1, 0);
   std::vector<std::vector<std::int32_t>> chunks(np);
@@ -74,11 +67,22 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
   const std::vector<std::int32_t> order = detail::morton_order(mesh);
   field_slot.resize(nt);
   for (std::size_t i = 0; i < order.size(); ++i) field_slot[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
+  walk_tets = detail::walk_tets(mesh, order);
+  star.resize(tet_ids.size());
+  parallel_for(star.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t s = b; s < e; ++s) {
+      const auto t = static_cast<std::size_t>(tet_ids[s]);
+      const int k = tet_local[s];
+      star[s].record = field_slot[t] << 2 | k;
+      for (int j = 0; j < 3; ++j) star[s].v[j] = mesh.tets[t][detail::kFaceVertices[k][j]];
+    }
+  });
 }
 
 void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scalars,
                         const TransferFunction& tf) {
   table = ExtinctionTable(tf);
+  this->scalars = scalars;
   const std::size_t nt = mesh.tets.size();
   linear.resize(nt);
   parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {

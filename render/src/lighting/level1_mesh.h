@@ -5,8 +5,16 @@
 
 #include "extinction_table.h"
 #include "penumbra/render/tet_mesh.h"
+#include "walk_mesh.h"
 
 namespace penumbra::render::lighting {
+
+/// A tet of a point's star: its walk record << 2 | the point's local index k, and face k's
+/// vertices in outward order.
+struct StarFace {
+  std::int32_t record;
+  std::int32_t v[3];
+};
 
 /// Per-mesh connectivity, built once: the tets around each point and the edge neighbours of each
 /// point (the scattering stencil), with the mean edge length.
@@ -17,13 +25,16 @@ struct Level1Topology {
   std::vector<std::int64_t> edge_offsets;  ///< point p's edge neighbours, sorted, unique
   std::vector<std::int32_t> edge_ids;
   std::vector<float> longest_edge;         ///< per point, its longest incident edge
-  /// Per tet, bit j: face j's canonical normal points inward (see canonical_face_inward), so the
-  /// walk gets oriented face planes without a test per crossing.
-  std::vector<std::uint8_t> face_inward;
-  /// Per tet, where its record sits in Level1Field: tets along a Morton curve of their centroids,
-  /// so that the walks of neighbouring vertices (which a pass takes one after another) read
-  /// neighbouring records instead of missing the cache at nearly every segment.
+  /// Per tet, where its record sits in Level1Field and in walk_tets: tets along a Morton curve
+  /// of their centroids, so that the walks of neighbouring vertices (which a pass takes one after
+  /// another) read neighbouring records instead of missing the cache at nearly every segment.
   std::vector<std::int32_t> field_slot;
+  /// The tets as the walk reads them, at their field slots.
+  std::vector<detail::WalkTet> walk_tets;
+  /// Point p's incident tets as seen from p: star[tet_offsets[p] .. tet_offsets[p+1]), each the
+  /// walk record and the face opposite p, so that finding where a walk from p starts reads
+  /// them in sequence instead of loading every incident tet.
+  std::vector<StarFace> star;
   double mean_edge = 0.0;
   double min_edge = 0.0;
 
@@ -46,6 +57,7 @@ struct LinearScalar {
 /// waiting for these records while they were in mesh order).
 struct Level1Field {
   std::vector<LinearScalar> linear;
+  std::vector<float> scalars;  ///< per point (the walk interpolates them across faces)
   ExtinctionTable table;
 
   void build(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scalars,

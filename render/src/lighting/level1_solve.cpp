@@ -11,11 +11,6 @@
 namespace penumbra::render::lighting {
 namespace {
 
-// A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
-// a degenerate configuration (it then falls back to level 0 and is counted).
-constexpr int kMaxMoves = 200000;
-// Faces within this angle-sine of parallel to the segment are not exits.
-constexpr double kParallel = 1e-12;
 // interpolate_light: optical depth interpolated up to this change across the light within a tet
 // (a factor 4 in rho), rho interpolated linearly from the next (a factor 16).
 constexpr double kGeometricDepth = 1.3862943611198906;
@@ -95,91 +90,6 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
   const double beta = std::clamp((across - kGeometricDepth) / (kLinearDepth - kGeometricDepth), 0.0, 1.0);
   const double geometric = std::exp(-m * path_d);
   return (1.0 - beta) * geometric + beta * linear;
-}
-
-Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double seg_length,
-                    std::int32_t* start, std::vector<WalkSegment>* record) {
-  const TetMesh& mesh = ctx.mesh;
-  const auto& topo = ctx.topology;
-  // Start: the incident tet into which d points most deeply. With e_j the tet's edges from v, d
-  // points into the tet when d = sum_j a_j e_j with every a_j >= 0; a_j = d . c_j / det with c_j
-  // the cross product of the other two edges, and a_j * h_j (h_j = |det| / |c_j|, the height of
-  // the tet over the face through v opposite e_j's end) is the cosine between d and that face's
-  // inward normal. The score is the smallest of the three; a score clearly positive (d strictly
-  // inside the tet's corner) ends the search, otherwise the best is taken.
-  std::int32_t tet = -1;
-  int local = 0;
-  double best = -HUGE_VAL;
-  if (start && *start == -2) return {Trace::Kind::left_mesh, -1, x, 0.0};
-  const bool cached = start && *start >= 0;
-  if (cached) {
-    tet = *start;
-    const auto& tv = mesh.tets[static_cast<std::size_t>(tet)];
-    while (local < 3 && tv[local] != v) ++local;
-    best = 1.0;
-  }
-  const auto s_begin = topo.tet_offsets[static_cast<std::size_t>(v)];
-  const auto s_end = cached ? s_begin : topo.tet_offsets[static_cast<std::size_t>(v) + 1];
-  for (auto s = s_begin; s < s_end; ++s) {
-    const std::int32_t t = topo.tet_ids[static_cast<std::size_t>(s)];
-    const int k = topo.tet_local[static_cast<std::size_t>(s)];
-    const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-    Vec3d e[3];
-    for (int j = 0, n = 0; j < 4; ++j)
-      if (j != k) e[n++] = mesh.points[static_cast<std::size_t>(tv[j])] - x;
-    const Vec3d c[3] = {cross(e[1], e[2]), cross(e[2], e[0]), cross(e[0], e[1])};
-    const double sign = dot(e[0], c[0]) > 0 ? 1.0 : -1.0;  // the local order may be either handedness
-    double score = HUGE_VAL;
-    for (const Vec3d& cj : c) score = std::min(score, sign * dot(d, cj) / penumbra::length(cj));
-    if (score > best) {
-      best = score;
-      tet = t;
-      local = k;
-      if (best > 1e-3) break;
-    }
-  }
-  if (tet < 0 || best < -1e-10) {
-    if (start) *start = -2;
-    return {Trace::Kind::left_mesh, tet, x, 0.0};
-  }
-  if (start) *start = tet;
-
-  unsigned excluded = 0xFu & ~(1u << local);  // the faces through v
-  double t_in = 0.0, depth = 0.0;
-  int piece_hint = -1;
-  for (int move = 0; move < kMaxMoves; ++move) {
-    double t_out = HUGE_VAL;
-    int exit = -1;
-    const unsigned inward = topo.face_inward[static_cast<std::size_t>(tet)];
-    for (int j = 0; j < 4; ++j) {
-      if (excluded & (1u << j)) continue;
-      const FacePlane f = face_plane(mesh, tet, j, (inward >> j) & 1u);
-      const double den = dot(f.n, d);
-      if (den <= 0.0 || den * den <= kParallel * kParallel * dot(f.n, f.n)) continue;
-      const double tj = dot(f.n, f.a - x) / den;
-      if (tj < t_out) {
-        t_out = tj;
-        exit = j;
-      }
-    }
-    t_out = std::max(t_out, t_in);
-    const std::int32_t slot = topo.field_slot[static_cast<std::size_t>(tet)];
-    if (t_out >= seg_length || exit < 0) {
-      depth += segment_depth(ctx, slot, x, d, t_in, seg_length, piece_hint);
-      if (record) record->push_back({slot, static_cast<float>(t_in), static_cast<float>(seg_length)});
-      return {Trace::Kind::inside, tet, x + d * seg_length, depth};
-    }
-    depth += segment_depth(ctx, slot, x, d, t_in, t_out, piece_hint);
-    if (record) record->push_back({slot, static_cast<float>(t_in), static_cast<float>(t_out)});
-    const std::int32_t next = mesh.neighbors[static_cast<std::size_t>(tet)][exit];
-    if (next < 0) return {Trace::Kind::left_mesh, tet, x + d * t_out, depth};
-    excluded = 0;
-    for (int f = 0; f < 4; ++f)
-      if (mesh.neighbors[static_cast<std::size_t>(next)][f] == tet) excluded |= 1u << f;
-    tet = next;
-    t_in = t_out;
-  }
-  return {Trace::Kind::lost, tet, x + d * seg_length, depth};
 }
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
@@ -275,18 +185,22 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     state.next_group = 0;
     state.next_vertex = 0;
     state.in_pass = true;
+    // A directional light's rays are all parallel: every point projected once per pass start
+    // (the field's scalars ride along), so a walk step reads one 32-byte record per point.
+    if (!point && state.full) project_parallel(mesh, back, ctx.field.scalars, state.parallel);
   }
   const bool full = state.full;
+  const auto& topo = ctx.topology;
+  const WalkInput walk_input{topo.walk_tets, topo.tet_offsets, topo.star, ctx.field.table,
+                             point ? nullptr : state.parallel.data(), mesh.points.data(), ctx.field.scalars.data()};
 
-  auto departure_value = [&](const Trace& tr, RecordedWalk& walk) {
-    if (!walk.has_weights) {
-      const auto bw = convex_weights(barycentric(mesh, tr.tet, tr.end));
-      for (int k = 0; k < 4; ++k) walk.weights[k] = static_cast<float>(bw[k]);
-      walk.path = box_path_length(mesh.bounds, tr.end, light);
-      walk.has_weights = true;
+  auto departure_value = [&](const Trace& tr, const Vec3d& end, RecordedWalk& walk) {
+    if (!walk.has_path) {
+      walk.path = box_path_length(mesh.bounds, end, light);
+      walk.has_path = true;
     }
     const std::array<double, 4> w{walk.weights[0], walk.weights[1], walk.weights[2], walk.weights[3]};
-    const auto& tv = mesh.tets[static_cast<std::size_t>(tr.tet)];
+    const auto& tv = topo.walk_tets[static_cast<std::size_t>(tr.tet)].v;
     double values[4], path[4];
     Vec3d corner[4];
     for (int k = 0; k < 4; ++k) {
@@ -295,7 +209,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       corner[k] = mesh.points[c];
       path[k] = order.path_length[c];
     }
-    const Vec3d u = point ? normalize(tr.end - light.vector) : -back;
+    const Vec3d u = point ? normalize(end - light.vector) : -back;
     return interpolate_light(w, values, path, walk.path, corner, u);
   };
 
@@ -324,37 +238,44 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     Trace tr;
     if (walk.valid) {
       // The same walk as last time: only the extinction along it is new.
-      double depth = 0.0;
       int piece_hint = -1;
       for (const WalkSegment& seg : walk.segments)
-        depth += segment_depth(ctx, seg.slot, x, d, seg.ta, seg.tb, piece_hint);
-      tr = {static_cast<Trace::Kind>(walk.kind), walk.tet, x + d * static_cast<double>(walk.end), depth};
-      if (tr.kind == Trace::Kind::inside) tr.end = x + d * len;
+        tr.depth += segment_depth(ctx, seg.slot, x, d, seg.ta, seg.tb, piece_hint);
+      tr.kind = static_cast<Trace::Kind>(walk.kind);
+      tr.tet = walk.tet;
+      tr.end = tr.kind == Trace::Kind::inside ? len : static_cast<double>(walk.end);
     } else {
-      walk.segments.clear();
-      tr = trace_segment(ctx, v, x, d, len, &state.start_tet[vv], &walk.segments);
+      // Walked into a scratch list and copied once: growing each vertex's own list step by step
+      // cost several allocations per vertex, a large share of a first pass.
+      thread_local std::vector<WalkSegment> walked;
+      walked.clear();
+      tr = walk_to_light(walk_input, v, x, d, len, &state.start_tet[vv], &walked);
+      walk.segments.assign(walked.begin(), walked.end());
       walk.tet = tr.tet;
       walk.kind = static_cast<std::uint8_t>(tr.kind);
-      walk.end = static_cast<float>(dot(tr.end - x, d));
-      walk.has_weights = false;
+      walk.end = static_cast<float>(tr.end);
+      for (int k = 0; k < 4; ++k) walk.weights[k] = tr.weights[k];
+      walk.has_path = false;
       walk.valid = tr.kind != Trace::Kind::lost;
       if (!walk.valid) walk.segments = {};
     }
+    Vec3d end = x + d * tr.end;
     double upstream = 0.0;
     state.departure_tet[vv] = -1;
     state.stale[vv] = 0;
     if (tr.kind == Trace::Kind::inside && !reaches_light) {
       state.departure_tet[vv] = tr.tet;
       // A corner not in an earlier group was read before its update in this pass.
-      for (std::int32_t c : mesh.tets[static_cast<std::size_t>(tr.tet)])
+      for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(tr.tet)].v)
         if (order.group_of[static_cast<std::size_t>(c)] >= order.group_of[vv]) state.stale[vv] = 1;
-      upstream = departure_value(tr, walk);
+      upstream = departure_value(tr, end, walk);
       // A departure tet with every corner on the inflow boundary carries no extinction to
       // interpolate from: walk on to where the ray leaves the mesh bounds instead (not recorded:
       // rare, and it depends on the values).
       if (std::isnan(upstream)) {
         walk.valid = false;
-        tr = trace_segment(ctx, v, x, d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
+        tr = walk_to_light(walk_input, v, x, d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
+        end = x + d * tr.end;
         state.departure_tet[vv] = -1;
         state.stale[vv] = 0;
       }
@@ -364,15 +285,15 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         if (reaches_light || std::isnan(upstream)) upstream = 1.0;
         break;
       case Trace::Kind::left_mesh:
-        upstream = ctx.grid.sample_prefer_outside(rho0, tr.end);
+        upstream = ctx.grid.sample_prefer_outside(rho0, end);
         break;
       default:
         lost.fetch_add(1, std::memory_order_relaxed);
-        upstream = ctx.grid.sample(rho0, tr.end);
+        upstream = ctx.grid.sample(rho0, end);
         break;
     }
     for (const Bounds& box : ctx.occluders)
-      if (segment_meets_box(x, tr.end, box)) return 0.0f;
+      if (segment_meets_box(x, end, box)) return 0.0f;
     return static_cast<float>(flush(upstream * std::exp(-ctx.sigma_a * tr.depth)));
   };
 
@@ -385,7 +306,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       // reads and the vertices downstream of a change are recomputed.
       bool recompute = full || state.stale[vv];
       if (!recompute && state.departure_tet[vv] >= 0)
-        for (std::int32_t c : mesh.tets[static_cast<std::size_t>(state.departure_tet[vv])])
+        for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(state.departure_tet[vv])].v)
           recompute = recompute || state.changed[static_cast<std::size_t>(c)];
       state.next[vv] = recompute ? update(v) : rho1[vv];
     }

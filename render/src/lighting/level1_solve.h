@@ -8,6 +8,7 @@
 
 #include "level0_grid.h"
 #include "level1_mesh.h"
+#include "level1_walk.h"
 #include "penumbra/render/light_volume.h"
 
 namespace penumbra::render::lighting {
@@ -32,32 +33,6 @@ struct Level1Context {
     return adaptive ? std::max(step, 2.0 * static_cast<double>(topology.longest_edge[v])) : step;
   }
 };
-
-/// One tet of a recorded walk and the walk's parameter range inside it.
-struct WalkSegment {
-  std::int32_t slot;  ///< the tet's Level1Topology::field_slot
-  float ta, tb;
-};
-
-/// Result of walking the straight segment from a vertex towards the light.
-struct Trace {
-  enum class Kind { inside, left_mesh, lost } kind;
-  std::int32_t tet;  ///< tet holding `end` (inside) or the last tet walked
-  Vec3d end;         ///< departure point, or where the walk left the mesh
-  double depth;      ///< integral of tau over the walked part (exact)
-};
-
-/// Walks from point `v` (at x) along unit direction d for `length` through the tets. Starts in
-/// the incident tet that d points most deeply into, then leaves each tet through the face with
-/// the smallest crossing parameter among those d points out of; faces (nearly) parallel to d and
-/// the face just entered are never exits, so light parallel to faces and segments through
-/// vertices and edges walk on. Crossing parameters come from canonical face planes (see
-/// face_plane), so both tets of a face agree exactly.
-/// `start`, when given, caches the start tet for this vertex and direction (-1: unknown, -2: d
-/// leaves the mesh at v); it stays valid while the mesh and the light do.
-/// `record`, when given, receives the walked segments (see RecordedWalk).
-Trace trace_segment(const Level1Context& ctx, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
-                    std::int32_t* start = nullptr, std::vector<WalkSegment>* record = nullptr);
 
 /// Length of the ray from x towards the light that lies inside `box` (the mesh bounds).
 double box_path_length(const Bounds& box, const Vec3d& x, const Light& light);
@@ -105,22 +80,23 @@ struct VertexOrder {
 struct RecordedWalk {
   std::vector<WalkSegment> segments;
   std::int32_t tet = -1;  ///< Trace::tet
-  float end = 0;          ///< Trace::end = x + d * end
-  float weights[4] = {0, 0, 0, 0};
+  float end = 0;          ///< Trace::end
+  float weights[4] = {0, 0, 0, 0};  ///< Trace::weights
   double path = 0;        ///< box_path_length at the departure point
   std::uint8_t kind = 0;  ///< Trace::Kind
-  bool valid = false, has_weights = false;
+  bool valid = false, has_path = false;
 };
 
 /// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
 /// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
 /// it (clear()) whenever the light, field or step changes.
 struct PassState {
-  std::vector<std::int32_t> start_tet;  ///< per vertex, see trace_segment; kept across clear()
+  std::vector<std::int32_t> start_tet;  ///< per vertex, see walk_to_light; kept across clear()
   std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet
   std::vector<std::int32_t> departure_tet;
   std::vector<std::uint8_t> stale, changed;
   std::vector<float> next;
+  std::vector<ParallelPoint> parallel;  ///< a directional light's projections, built per full pass
   // A pass interrupted by its deadline resumes at next_group, vertex next_vertex of the order.
   bool in_pass = false, full = false;
   std::size_t next_group = 0, next_vertex = 0;

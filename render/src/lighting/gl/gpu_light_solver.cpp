@@ -68,14 +68,13 @@ struct GpuLightBuffers {
 struct GpuLightSolver::Impl {
   std::shared_ptr<GpuDevice> device;
   const TetMesh* mesh = nullptr;
-  std::vector<std::int32_t> field_slot;  // Level1Topology::field_slot: where set_field finds a tet
   std::size_t points = 0;
   Vec3d centre;  // the kernels work relative to the mesh centre (float32)
   GLuint level0_program = 0, level1_program = 0, scatter_program = 0;
   // Mesh (uploaded once).
   Buffer mesh_points, tets, neighbors, incidence, edges, weights;
   // Field and grid.
-  Buffer tet_field, params, grid_tau, grid_mask, counters;
+  Buffer point_scalars, params, grid_tau, grid_mask, counters;
   std::vector<float> occluder_boxes;  // lo.xyz, hi.xyz per box, relative to the centre
   int breakpoint_count = 0, occluder_offset = 0;
   std::array<int, 3> dims{0, 0, 0};
@@ -150,7 +149,7 @@ struct GpuLightSolver::Impl {
   }
   void release(const GlApi& gl) {
     Impl& m = *this;
-    for (Buffer* b : {&m.mesh_points, &m.tets, &m.neighbors, &m.incidence, &m.edges, &m.weights, &m.tet_field,
+    for (Buffer* b : {&m.mesh_points, &m.tets, &m.neighbors, &m.incidence, &m.edges, &m.weights, &m.point_scalars,
                       &m.params, &m.grid_tau, &m.grid_mask, &m.counters, &m.pre, &m.iterate[0], &m.iterate[1]})
       if (b->id) {
         gl.DeleteBuffers(1, &b->id);
@@ -177,7 +176,6 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
   Impl& m = *m_impl;
   m.device = std::move(device);
   m.mesh = &mesh;
-  m.field_slot = topology.field_slot;
   m.points = mesh.points.size();
   m.centre = (mesh.bounds.lo + mesh.bounds.hi) * 0.5;
   GpuDevice::Impl& d = m.dev();
@@ -203,22 +201,29 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
     pts[4 * p + 2] = static_cast<float>(r.z);
     pts[4 * p + 3] = p < topology.longest_edge.size() ? topology.longest_edge[p] : 0.0f;
   }
-  std::vector<std::int32_t> tv(4 * mesh.tets.size()), nb(4 * mesh.tets.size());
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+  // Tets as the CPU walk's records (at their field slots, neighbours as record << 2 | face), and
+  // each point's star as (record << 2 | local index, the opposite face's vertices outward).
+  const auto& walk = topology.walk_tets;
+  std::vector<std::int32_t> tv(4 * walk.size()), nb(4 * walk.size());
+  for (std::size_t t = 0; t < walk.size(); ++t)
     for (int k = 0; k < 4; ++k) {
-      tv[4 * t + k] = mesh.tets[t][k];
-      nb[4 * t + k] = mesh.neighbors[t][k];
+      tv[4 * t + k] = walk[t].v[k];
+      nb[4 * t + k] = walk[t].next[k];
     }
-  to_int32(static_cast<std::int64_t>(np + 1 + topology.tet_ids.size()), "the point-to-tet table");
+  to_int32(static_cast<std::int64_t>(np + 1 + 4 * topology.star.size()), "the point-to-tet table");
   to_int32(static_cast<std::int64_t>(np + 1 + topology.edge_ids.size()), "the edge table");
   to_int32(static_cast<std::int64_t>(4 * mesh.tets.size()), "the tet count times 4");
-  std::vector<std::int32_t> inc(np + 1 + topology.tet_ids.size()), edges(np + 1 + topology.edge_ids.size());
+  std::vector<std::int32_t> inc(np + 1 + 4 * topology.star.size()), edges(np + 1 + topology.edge_ids.size());
   for (std::size_t p = 0; p <= np; ++p) {
-    inc[p] = static_cast<std::int32_t>(np + 1 + static_cast<std::size_t>(topology.tet_offsets[p]));
+    inc[p] = static_cast<std::int32_t>(np + 1 + 4 * static_cast<std::size_t>(topology.tet_offsets[p]));
     edges[p] = static_cast<std::int32_t>(np + 1 + static_cast<std::size_t>(topology.edge_offsets[p]));
   }
-  for (std::size_t s = 0; s < topology.tet_ids.size(); ++s)
-    inc[np + 1 + s] = topology.tet_ids[s] * 4 + topology.tet_local[s];
+  for (std::size_t s = 0; s < topology.star.size(); ++s) {
+    const StarFace& f = topology.star[s];
+    std::int32_t* e = &inc[np + 1 + 4 * s];
+    e[0] = f.record;
+    for (int j = 0; j < 3; ++j) e[1 + j] = f.v[j];
+  }
   std::copy(topology.edge_ids.begin(), topology.edge_ids.end(), edges.begin() + static_cast<std::ptrdiff_t>(np + 1));
 
   // Mesh, topology and weights, the scattering's three colour fields (12 B per point each)
@@ -281,16 +286,6 @@ void GpuLightSolver::set_grid(const Level0Grid& grid) {
 
 void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field) {
   Impl& m = *m_impl;
-  const std::size_t nt = m.mesh->tets.size();
-  std::vector<float> tf4(4 * nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    // The shader takes the gradient and the scalar at the tet's first vertex.
-    const LinearScalar& f = field.linear[static_cast<std::size_t>(m.field_slot[t])];
-    tf4[4 * t] = static_cast<float>(f.grad.x);
-    tf4[4 * t + 1] = static_cast<float>(f.grad.y);
-    tf4[4 * t + 2] = static_cast<float>(f.grad.z);
-    tf4[4 * t + 3] = static_cast<float>(f.at(m.mesh->points[static_cast<std::size_t>(m.mesh->tets[t][0])]));  // NaN: no data
-  }
   // The CPU walk's extinction table, piece by piece: tau linear in s between breakpoints.
   const ExtinctionTable& table = field.table;
   const std::vector<double>& x = table.breakpoints();
@@ -306,7 +301,7 @@ void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field)
   params.insert(params.end(), m.occluder_boxes.begin(), m.occluder_boxes.end());
   CurrentContext current(m.dev());
   const GlApi& gl = current.gl();
-  m.upload(gl, m.tet_field, tf4);
+  m.upload(gl, m.point_scalars, field.scalars);  // NaN: no data
   m.upload(gl, m.params, params);
   m.upload(gl, m.grid_tau, grid.tau());
   Impl::check_errors(gl, "uploading the field");
@@ -408,7 +403,7 @@ double GpuLightSolver::level1_pass(GpuLightBuffers& buffers, const Light& light,
   CurrentContext current(m.dev());
   const GlApi& gl = current.gl();
   const GLuint prog = m.level1_program;
-  const Buffer* bindings[kLevel1Bindings] = {&m.mesh_points, &m.tets,      &m.neighbors,    &m.tet_field,
+  const Buffer* bindings[kLevel1Bindings] = {&m.mesh_points, &m.tets,      &m.neighbors,    &m.point_scalars,
                                              &m.incidence,   &m.params,    &m.grid_mask,    &buffers.rho0,
                                              &buffers.rho1,  &buffers.next, &buffers.order, &buffers.start_tet,
                                              &m.counters};

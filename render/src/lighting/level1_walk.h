@@ -1,0 +1,70 @@
+// render/src/lighting/level1_walk.h -- the walk from a vertex towards the light through the tets
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "../ray_frame.h"
+#include "../walk_mesh.h"
+#include "extinction_table.h"
+#include "level1_mesh.h"
+#include "penumbra/render/tet_mesh.h"
+
+namespace penumbra::render::lighting {
+
+/// A point seen along a directional light: coordinates in the plane across the light, depth
+/// towards the light, and its scalar; one 32-byte record per walk step.
+struct ParallelPoint {
+  double x, y, depth;
+  float s;
+};
+
+/// Every point projected for a directional light towards unit direction `towards` (the frame of
+/// detail::RayFrame, so the walk's edge signs follow ray_frame.h's rules).
+void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vector<float>& scalars,
+                      std::vector<ParallelPoint>& out);
+
+/// One tet of a recorded walk and the walk's parameter range inside it.
+struct WalkSegment {
+  std::int32_t slot;  ///< the tet's walk record (Level1Topology::walk_tets, also its field slot)
+  float ta, tb;
+};
+
+/// Result of walking the straight segment from a vertex towards the light.
+struct Trace {
+  enum class Kind { inside, left_mesh, lost } kind = Kind::lost;
+  std::int32_t tet = -1;  ///< walk record holding the end (inside) or the last one walked
+  double end = 0;         ///< ray parameter of the departure point, or where the walk left the mesh
+  double depth = 0;       ///< integral of tau over the walked part (exact)
+  float weights[4] = {0, 0, 0, 0};  ///< inside: the end's barycentric weights in `tet` (convex)
+};
+
+/// What the walk reads: the tets as walk records with each point's incident records, the
+/// extinction table, and the rays (one of the two).
+struct WalkInput {
+  const std::vector<detail::WalkTet>& tets;
+  const std::vector<std::int64_t>& star_offsets;  ///< point p's records: star[star_offsets[p] ..]
+  const std::vector<StarFace>& star;
+  const ExtinctionTable& table;
+  const ParallelPoint* parallel = nullptr;  ///< a directional light's projections, else
+  const Vec3d* points = nullptr;            ///< the mesh points and
+  const float* scalars = nullptr;           ///< their scalars (rays converging on a point light)
+};
+
+/// Walks from point v (at x) along unit direction d (towards the light) for `length`.
+///
+/// The walk is the renderer's (cpu_ray_caster.cpp): each step leaves the tet through the face
+/// whose edges the ray passes on the inside, decided by the signs of 2D cross products in the
+/// plane across the ray, each edge's value computed in one canonical direction and exact zeros
+/// broken by one consistent perturbation of the ray (ray_frame.h). Through vertices, along edges
+/// and in face planes it therefore walks as a nearby generic ray would, never losing or doubling
+/// a tet. The start is the tet of v's star whose face opposite v the ray leaves through (the
+/// perturbed ray misses v, so exactly one such face lies ahead of an interior vertex; none: the
+/// ray leaves the mesh at v). Depths and scalars at each crossing are interpolated over the
+/// crossed face, so the optical depth of each segment is integrated exactly.
+/// `start`, when given, caches the start for this vertex and direction (-1: unknown, -2: the ray
+/// leaves the mesh at v, else record << 2 | local index). `record`, when given, receives the
+/// walked segments.
+Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
+                    std::int32_t* start = nullptr, std::vector<WalkSegment>* record = nullptr);
+
+}  // namespace penumbra::render::lighting
