@@ -12,13 +12,12 @@
 #include "penumbra/core/mesh_validation.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/boundary_surface.h"
+#include "walk_mesh.h"
 
 namespace penumbra::render {
 namespace {
 
-// Face k of a tet is the one opposite vertex k; listed so that its normal (right hand) points
-// out of a positively oriented tet.
-constexpr int kFaceVertices[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+using detail::kFaceVertices;
 
 struct Bits3 {
   std::uint64_t x, y, z;

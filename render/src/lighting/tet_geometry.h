@@ -6,43 +6,8 @@
 #include <cstdint>
 
 #include "penumbra/render/tet_mesh.h"
-#include "walk_mesh.h"
 
 namespace penumbra::render::lighting {
-
-/// Local vertices of face j (the face opposite vertex j), outward for a positive tet.
-using detail::kFaceVertices;
-
-/// Plane of face j of tet t: outward normal n (not unit) and a point a on it. Computed from the
-/// face's vertices sorted by global id, so the two tets sharing a face get exactly opposite
-/// normals and the same point: a line crossing the face gets the same parameter from both.
-struct FacePlane {
-  Vec3d n, a;
-};
-/// The plane of face j of tet t with its normal from the vertices sorted by id, not yet oriented.
-inline FacePlane canonical_face(const TetMesh& mesh, std::int32_t t, int j) {
-  const auto& tv = mesh.tets[static_cast<std::size_t>(t)];
-  std::int32_t f0 = tv[kFaceVertices[j][0]], f1 = tv[kFaceVertices[j][1]], f2 = tv[kFaceVertices[j][2]];
-  if (f0 > f1) std::swap(f0, f1);
-  if (f1 > f2) std::swap(f1, f2);
-  if (f0 > f1) std::swap(f0, f1);
-  const Vec3d& a = mesh.points[static_cast<std::size_t>(f0)];
-  const Vec3d& b = mesh.points[static_cast<std::size_t>(f1)];
-  const Vec3d& c = mesh.points[static_cast<std::size_t>(f2)];
-  return {cross(b - a, c - a), a};
-}
-/// True when face j's canonical normal points into tet t (face_plane then negates it).
-inline bool canonical_face_inward(const TetMesh& mesh, std::int32_t t, int j) {
-  const FacePlane f = canonical_face(mesh, t, j);
-  return dot(f.n, mesh.points[static_cast<std::size_t>(mesh.tets[static_cast<std::size_t>(t)][j])] - f.a) > 0;
-}
-/// The outward plane of face j of tet t, given canonical_face_inward(mesh, t, j) (which the
-/// level-1 topology caches per tet).
-inline FacePlane face_plane(const TetMesh& mesh, std::int32_t t, int j, bool inward) {
-  FacePlane f = canonical_face(mesh, t, j);
-  f.n = f.n * (inward ? -1.0 : 1.0);
-  return f;
-}
 
 /// Barycentric coordinates of p in tet t by signed volumes (sum to 1 up to rounding).
 inline std::array<double, 4> barycentric(const TetMesh& mesh, std::int32_t t, const Vec3d& p) {
