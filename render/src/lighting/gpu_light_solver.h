@@ -12,9 +12,8 @@
 //    function of its inputs. Every ordered vertex is recomputed each pass (the CPU skips those
 //    whose inputs did not change; they would reproduce their value). A closing dispatch
 //    publishes the pass and takes the largest change.
-//  - scattering: Jacobi iterations of the same implicit step (the CPU sweeps Gauss-Seidel within
-//    blocks), to the same tolerance on the largest change; a convex combination at every point,
-//    so it converges for any sigma_s (contraction factor s W / (1 + s W), W = 6).
+//  - scattering: the CPU's Chebyshev-accelerated Jacobi iterations of the same implicit step
+//    (light_scattering.h), to the same tolerance on the largest change.
 // Level-0 resampling, vertex order, warm starts and the combination of the lights stay on the
 // CPU; their inputs are uploaded when they change and every result is read back, so the CPU-side
 // vectors (light_rho, level0_rho, light_rgb) always hold the current estimate.
@@ -70,7 +69,7 @@ public:
 
   /// The scattering's source (eq. 9) and its starting iterate (3 floats per point each).
   void set_scatter_source(const std::vector<float>& pre, const std::vector<float>& start);
-  /// Runs one batch of Jacobi iterations: at most `max_iterations` and at most 8 (one
+  /// Runs one batch of (Chebyshev-accelerated) Jacobi iterations: at most `max_iterations` and at most 8 (one
   /// read-back of the changes per batch), stopping after the first whose largest change is <=
   /// tolerance. Returns the iterations run; `residual` gets the last checked one's change.
   int scatter(int max_iterations, double tolerance, const std::array<double, 3>& sigma_s, double& residual);

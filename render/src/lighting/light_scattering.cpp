@@ -78,36 +78,42 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
   }
 }
 
-double scatter_sweep(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
-                     std::vector<float>& current, std::vector<float>& snapshot) {
-  ScatterSweep sweep;
-  sweep.snapshot.swap(snapshot);
-  scatter_sweep_part(plan, pre, sigma_s, current, sweep, kScatterChunks);
-  snapshot.swap(sweep.snapshot);
-  return sweep.residual;
+double scatter_iteration(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                         std::vector<float>& current, ScatterSolve& solve) {
+  scatter_iteration_part(plan, pre, sigma_s, current, solve, kScatterChunks);
+  return solve.residual;
 }
 
-bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
-                        std::vector<float>& current, ScatterSweep& sweep, std::size_t chunks) {
+bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                            std::vector<float>& current, ScatterSolve& solve, std::size_t chunks) {
   // Four channels (the fourth is padding) in one vector: a neighbour costs one load and one
   // multiply-add. Sums in float: a dozen positive terms, relative error ~1e-7.
   typedef float Colour __attribute__((vector_size(16)));
   constexpr std::size_t S = kPlannedStride;
   const std::size_t np = plan.order.size();
-  if (sweep.next_chunk == 0) {
-    sweep.snapshot = current;
-    // Which points have a finite source, once per sweep: the inner loop then reads one byte per
-    // neighbour (a table that stays in cache) instead of testing its source values.
-    sweep.finite.resize(np);
-    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-      for (std::size_t p = b; p < e; ++p) sweep.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
-    });
-    sweep.residual = 0.0;
+  if (solve.next_chunk == 0) {
+    if (solve.iterations == 0) {
+      // Which points have a finite source, once per solve: the inner loop then reads one byte
+      // per neighbour (a table that stays in cache) instead of testing its source values.
+      solve.finite.resize(np);
+      parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+        for (std::size_t p = b; p < e; ++p) solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
+      });
+      solve.other.resize(current.size());
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+      const double rho = 6.0 * sigma_s[ch] / (1.0 + 6.0 * sigma_s[ch]);
+      double& w = solve.omega[static_cast<std::size_t>(ch)];
+      w = solve.iterations == 0 ? 1.0 : solve.iterations == 1 ? 1.0 / (1.0 - 0.5 * rho * rho) : 1.0 / (1.0 - 0.25 * rho * rho * w);
+    }
+    solve.residual = 0.0;
   }
-  const std::size_t first = sweep.next_chunk;
+  const std::size_t first = solve.next_chunk;
   const std::size_t last = std::min(kScatterChunks, first + std::max<std::size_t>(chunks, 1));
-  const std::vector<float>& snapshot = sweep.snapshot;
-  const std::vector<std::uint8_t>& finite = sweep.finite;
+  const std::vector<std::uint8_t>& finite = solve.finite;
+  const bool plain = solve.iterations == 0;  // L_1 = J(L_0): L_{-1} does not exist
+  const Colour omega = {static_cast<float>(solve.omega[0]), static_cast<float>(solve.omega[1]),
+                        static_cast<float>(solve.omega[2]), 0.0f};
   std::vector<double> residuals(last - first, 0.0);
   parallel_for(last - first, 1, [&](std::size_t c0, std::size_t c1) {
     for (std::size_t c = first + c0; c < first + c1; ++c) {
@@ -121,16 +127,14 @@ bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, 
           // Points without a finite source value are left out (their own value is derived).
           if (!finite[q]) continue;
           const float w = plan.weights[static_cast<std::size_t>(s)];
-          // Gauss-Seidel inside the block, the previous iterate across blocks.
-          const float* src = (q >= begin && q < end ? current.data() : snapshot.data()) + S * q;
           Colour v;
-          std::memcpy(&v, src, sizeof v);
+          std::memcpy(&v, current.data() + S * q, sizeof v);
           sum += w * v;
           wsum += w;
         }
         const bool own = finite[p];
+        Colour jacobi;
         for (int ch = 0; ch < 3; ++ch) {
-          const double old = current[S * p + ch];
           const double sum_ch = sum[ch];
           double v;
           if (!own)
@@ -139,18 +143,32 @@ bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, 
             v = pre[S * p + ch];
           else
             v = (pre[S * p + ch] + sigma_s[ch] * sum_ch) / (1.0 + sigma_s[ch] * wsum);
-          const float f = static_cast<float>(v);
-          const double change = std::fabs(static_cast<double>(f) - old);
-          if (std::isfinite(change)) residual = std::max(residual, change);
-          current[S * p + ch] = f;
+          jacobi[ch] = static_cast<float>(v);
         }
+        jacobi[3] = 0.0f;
+        Colour next = jacobi;
+        if (!plain && own) {
+          Colour before;
+          std::memcpy(&before, solve.other.data() + S * p, sizeof before);
+          next = before + omega * (jacobi - before);
+        }
+        Colour now;
+        std::memcpy(&now, current.data() + S * p, sizeof now);
+        for (int ch = 0; ch < 3; ++ch) {
+          const double change = std::fabs(static_cast<double>(next[ch]) - now[ch]);
+          if (std::isfinite(change)) residual = std::max(residual, change);
+        }
+        std::memcpy(solve.other.data() + S * p, &next, sizeof next);
       }
       residuals[c - first] = residual;
     }
   });
-  for (double r : residuals) sweep.residual = std::max(sweep.residual, r);
-  sweep.next_chunk = last == kScatterChunks ? 0 : last;
-  return last == kScatterChunks;
+  for (double r : residuals) solve.residual = std::max(solve.residual, r);
+  solve.next_chunk = last == kScatterChunks ? 0 : last;
+  if (solve.next_chunk != 0) return false;
+  current.swap(solve.other);
+  ++solve.iterations;
+  return true;
 }
 
 }  // namespace penumbra::render::lighting

@@ -42,33 +42,45 @@ inline constexpr std::size_t kPlannedStride = 4;
 void to_plan_order(const ScatterPlan& plan, const std::vector<float>& by_point, std::vector<float>& by_position);
 void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_position, std::vector<float>& by_point);
 
-/// One Gauss-Seidel sweep of the backward-Euler step (I - s Laplacian) L = L0 per channel:
-///     L_v = (L0_v + s sum_i w_i L_i) / (1 + s sum_i w_i),
-/// updating `current` in place; a convex combination of L0_v and the current neighbour values.
-/// `pre` and `current` hold kPlannedStride floats per position of the plan. The plan's blocks are swept in
-/// parallel: Gauss-Seidel within a block, the previous iterate (`snapshot`, scratch) across
-/// blocks. Points whose L0 is not finite are left out of every neighbour sum and take the
-/// weighted mean of their finite neighbours (0 without any), so NaN never spreads. Returns the
-/// largest change. (Over-relaxation was tried: the matrix is not symmetric and the blocks are
-/// coupled Jacobi-wise, and factors above 1.2 diverged while 1.2 saved nothing.)
-double scatter_sweep(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
-                     std::vector<float>& current, std::vector<float>& snapshot);
-
-/// A sweep done in pieces, so that a frame's time budget is not left unused for want of room
-/// for a whole sweep. The blocks read each other only through the snapshot taken when the sweep
-/// begins, so its values do not depend on how its blocks are split between calls.
-struct ScatterSweep {
-  std::vector<float> snapshot;
+/// The backward-Euler step (I - s Laplacian) L = L0 per channel is solved by Jacobi iterations
+///     J(L)_v = (L0_v + s sum_i w_i L_i) / (1 + s sum_i w_i)
+/// with Chebyshev acceleration (Golub & Varga's semi-iterative method):
+///     L_{k+1} = L_{k-1} + omega_{k+1} (J(L_k) - L_{k-1}),
+///     omega_1 = 1, omega_2 = 1 / (1 - rho^2 / 2), omega_{k+1} = 1 / (1 - rho^2 omega_k / 4).
+/// J's iteration matrix is a positive diagonal times the symmetric matrix of 1 / d^2 weights, so
+/// its eigenvalues are real, and they lie in [-rho, rho], rho = 6 s / (1 + 6 s) (the weights of a
+/// point sum to at most 6). The error then falls by about rho / (1 + sqrt(1 - rho^2)) per
+/// iteration instead of rho (Jacobi) or about rho^2 (Gauss-Seidel): at s = 1, 0.57 against 0.86
+/// and 0.73 (Gauss-Seidel in blocks measured 0.75), so half the iterations of the sweeps it
+/// replaced, and far fewer for larger s. Every iteration reads the previous iterate only, so the
+/// blocks run in parallel and the result does not depend on the thread count.
+/// Points whose L0 is not finite are left out of every neighbour sum and take the weighted mean
+/// of their finite neighbours (0 without any), so NaN never spreads. Intermediate iterates may
+/// overshoot by about the remaining error; the converged one is the step's solution to the
+/// tolerance, which has no new extrema.
+struct ScatterSolve {
+  std::vector<float> other;          ///< L_{k-1} while iteration k + 1 runs, overwritten by L_{k+1}
   std::vector<std::uint8_t> finite;  ///< per position: its source is finite
-  std::size_t next_chunk = 0;        ///< 0: the next piece begins a sweep
-  double residual = 0.0;             ///< largest change so far in this sweep
-  void restart() { next_chunk = 0; }
+  int iterations = 0;                ///< finished since the restart
+  std::array<double, 3> omega{1.0, 1.0, 1.0};
+  std::size_t next_chunk = 0;  ///< 0: the next piece begins an iteration
+  double residual = 0.0;       ///< largest change so far in this iteration
+  void restart() {
+    next_chunk = 0;
+    iterations = 0;
+  }
 };
 
-/// Sweeps blocks [next_chunk, next_chunk + chunks) (at least one; beginning the sweep when
-/// next_chunk is 0). Returns true when that finished the sweep: its largest change is then in
-/// `sweep.residual`, and the next piece begins a new sweep.
-bool scatter_sweep_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
-                        std::vector<float>& current, ScatterSweep& sweep, std::size_t chunks);
+/// Runs blocks [next_chunk, next_chunk + chunks) of an iteration (at least one; beginning the
+/// iteration when next_chunk is 0), so that a frame's time budget is not left unused for want of
+/// room for a whole one. `current` (kPlannedStride floats per position of the plan) holds the
+/// last finished iterate throughout; returns true when this piece finished the iteration: it is
+/// then in `current`, its largest change in `solve.residual`.
+bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                            std::vector<float>& current, ScatterSolve& solve, std::size_t chunks);
+
+/// One whole iteration (scatter_iteration_part over every block); returns its largest change.
+double scatter_iteration(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
+                         std::vector<float>& current, ScatterSolve& solve);
 
 }  // namespace penumbra::render::lighting

@@ -22,6 +22,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 // A recorded level-1 walk (PassState::walks) per point: the 64-byte record and about 9 segments of 12 B.
 constexpr double kWalkBytesPerPoint = 180.0;
+// The smallest scattering tolerance (relative to max |L|) that float iterates can meet: 16 ulp.
+constexpr double kScatterToleranceFloor = 16.0 / (1 << 24);
 double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -112,8 +114,8 @@ struct LightVolume::Impl {
   double step = 0;
   // The last durations, for the time budget's look-ahead (-1: not timed yet).
   double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
-  lighting::ScatterSweep sweep;  // the CPU sweep in progress (a frame may end inside one)
-  double last_chunk_ms = -1;     // one block of a CPU sweep
+  lighting::ScatterSolve solve;  // the CPU iteration in progress (a frame may end inside one)
+  double last_chunk_ms = -1;     // one block of a CPU iteration
   double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
@@ -250,7 +252,7 @@ struct LightVolume::Impl {
     combine_pending = false;
     gpu_scatter_stale = true;
     cpu_scatter_stale = true;
-    sweep.restart();
+    solve.restart();
   }
 };
 
@@ -395,12 +397,15 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   for (const auto& l : im.lights) lights_settled = lights_settled && l.stage == Stage::done;
   if (!im.scatter_done && lights_settled) {
     const auto ts = Clock::now();
-    const double tolerance = im.opt.scatter_tolerance * std::max(im.pre_scale, 1e-300);
+    // The iterates are stored in float, and an iteration that reads only the previous iterate
+    // settles within a few units in the last place, not on an exact fixed point: a tolerance
+    // below 16 of them (1e-6 relative) is raised to that.
+    const double tolerance = std::max(im.opt.scatter_tolerance, kScatterToleranceFloor) * std::max(im.pre_scale, 1e-300);
     bool gpu_ran = false, cpu_ran = false;
     while (!im.scatter_done) {
       // The CPU sweeps in pieces of whole blocks (two or more, one per core): as many as the
       // budget has room for, timed per block; the GPU runs whole iterations.
-      std::size_t chunks = lighting::kScatterChunks - im.sweep.next_chunk;
+      std::size_t chunks = lighting::kScatterChunks - im.solve.next_chunk;
       if (im.gpu || im.last_chunk_ms < 0 || !std::isfinite(budget.max_ms)) {
         if (!allowed(im.gpu ? im.last_sweep_ms : im.last_chunk_ms < 0 ? -1.0 : im.last_chunk_ms * chunks)) break;
       } else {
@@ -414,7 +419,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       did_work = true;
       int ran = 1;
       if (im.gpu) {
-        // A batch of Jacobi iterations, never more than the cap or the work units left.
+        // A batch of iterations, never more than the cap or the work units left.
         if (im.gpu_scatter_stale) im.gpu->set_scatter_source(im.pre, im.rgb);
         im.gpu_scatter_stale = false;
         int most = im.opt.scatter_max_iterations - im.scatter_iterations;
@@ -427,12 +432,12 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
           lighting::to_plan_order(im.scatter_plan, im.rgb, im.rgb_planned);
         }
         im.cpu_scatter_stale = false;
-        const bool whole = lighting::scatter_sweep_part(im.scatter_plan, im.pre_planned, im.opt.sigma_s, im.rgb_planned,
-                                                        im.sweep, chunks);
+        const bool whole = lighting::scatter_iteration_part(im.scatter_plan, im.pre_planned, im.opt.sigma_s,
+                                                            im.rgb_planned, im.solve, chunks);
         cpu_ran = true;
         im.last_chunk_ms = ms_since(tw) / static_cast<double>(chunks);
         if (!whole) continue;
-        im.scatter_residual = im.sweep.residual;
+        im.scatter_residual = im.solve.residual;
       }
       im.last_sweep_ms = ms_since(tw);
       im.scatter_iterations += ran;

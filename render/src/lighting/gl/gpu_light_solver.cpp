@@ -82,6 +82,8 @@ struct GpuLightSolver::Impl {
   // Scattering: source and two iterates (ping-pong).
   Buffer pre, iterate[2];
   int current = 0;
+  int scatter_iterations = 0;  // since the source was set: Chebyshev's omega depends on it
+  std::array<double, 3> omega{1.0, 1.0, 1.0};
 
   GpuDevice::Impl& dev() const { return device->impl(); }
 
@@ -456,6 +458,7 @@ void GpuLightSolver::set_scatter_source(const std::vector<float>& pre, const std
   const GlApi& gl = current.gl();
   m.upload(gl, m.pre, pre);
   m.current = 0;
+  m.scatter_iterations = 0;
   m.upload(gl, m.iterate[0], start);
   if (m.iterate[1].bytes < start.size() * sizeof(float)) m.allocate(gl, m.iterate[1], start.size() * sizeof(float), nullptr);
   Impl::check_errors(gl, "uploading the scattering source");
@@ -473,7 +476,8 @@ int GpuLightSolver::scatter(int max_iterations, double tolerance, const std::arr
   Impl::bind(gl, 5, m.counters);
   Impl::set1i(gl, prog, "u_points", static_cast<long long>(m.points));
   Impl::set3f(gl, prog, "u_sigma_s", {sigma_s[0], sigma_s[1], sigma_s[2]});
-  const GLint slot = Impl::loc(gl, prog, "u_slot");
+  const GLint slot = Impl::loc(gl, prog, "u_slot"), omega = Impl::loc(gl, prog, "u_omega"),
+              first = Impl::loc(gl, prog, "u_first");
   gl.UseProgram(prog);
   const int batch = std::clamp(max_iterations, 1, kScatterBatch);
   m.clear_counters(gl);
@@ -481,6 +485,16 @@ int GpuLightSolver::scatter(int max_iterations, double tolerance, const std::arr
     Impl::bind(gl, 3, m.iterate[m.current]);
     Impl::bind(gl, 4, m.iterate[1 - m.current]);
     gl.ProgramUniform1i(prog, slot, i);
+    // Chebyshev's weights, as scatter_iteration_part computes them.
+    const int k = m.scatter_iterations++;
+    for (int ch = 0; ch < 3; ++ch) {
+      const double rho = 6.0 * sigma_s[static_cast<std::size_t>(ch)] / (1.0 + 6.0 * sigma_s[static_cast<std::size_t>(ch)]);
+      double& w = m.omega[static_cast<std::size_t>(ch)];
+      w = k == 0 ? 1.0 : k == 1 ? 1.0 / (1.0 - 0.5 * rho * rho) : 1.0 / (1.0 - 0.25 * rho * rho * w);
+    }
+    gl.ProgramUniform3f(prog, omega, static_cast<GLfloat>(m.omega[0]), static_cast<GLfloat>(m.omega[1]),
+                        static_cast<GLfloat>(m.omega[2]));
+    gl.ProgramUniform1i(prog, first, k == 0 ? 1 : 0);
     m.dispatch(gl, m.points);
     m.current = 1 - m.current;
   }
