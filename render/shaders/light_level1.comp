@@ -177,9 +177,13 @@ const int kFaceVertices[12] = int[12](1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1);
 const int kAbc[12] = int[12](1, 3, 2, 0, 2, 3, 1, 0, 3, 0, 1, 2);
 const int kExitX[8] = int[8](1, 1, 2, 2, 3, 1, 3, 1);
 
-// The ray's frame (RayFrame: Duff et al.) and the quarter turn of the plane across it.
+// The ray's frame (RayFrame: Duff et al.), the quarter turn of the plane across it, and whether
+// edge values within kSnap of their size are snapped to 0 (a retried walk: level1_walk.cpp).
+// Float32 projections are noisier than the CPU's doubles, hence the larger kSnap.
 vec3 g_origin, g_u, g_v, g_d;
 int g_quarter;
+bool g_snap;
+const float kSnap = 1e-5;
 
 void set_frame(vec3 o, vec3 d) {
   g_origin = o;
@@ -204,10 +208,13 @@ vec3 at(int id) {
   return vec3(x, y, z);
 }
 
+float edge_noise(vec3 a, vec3 b) { return kSnap * (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y); }
+
 float edge_value(vec3 a, int ia, vec3 b, int ib) {
   bool fwd = ia <= ib;
   vec3 p = fwd ? a : b, q = fwd ? b : a;
   precise float v = p.x * q.y - p.y * q.x;
+  if (g_snap && abs(v) <= edge_noise(a, b)) return 0.0;
   return fwd ? v : -v;
 }
 
@@ -256,7 +263,8 @@ bool leaves_through(ivec3 f, int v, inout bool grazed) {
   bool positive = edge_positive(e0, q1, f.y, q2, f.z) && edge_positive(e1, q2, f.z, q0, f.x) &&
                   edge_positive(e2, q0, f.x, q1, f.y);
   if (!positive) {
-    grazed = grazed || (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0);
+    // Touched on its rim, up to rounding noise: the ray runs along the boundary.
+    grazed = grazed || (e0 >= -edge_noise(q1, q2) && e1 >= -edge_noise(q2, q0) && e2 >= -edge_noise(q0, q1));
     return false;
   }
   cross_face(f, q0, q1, q2, max(vec3(e0, e1, e2), vec3(0.0)), 0.0, scalars[v]);
@@ -352,15 +360,17 @@ Trace walk(int v, float seg_length, bool use_cache) {
   return tr;
 }
 
-// The walk, retried with the plane across the ray turned when it could not start only by the
-// tie rule (walk_any_side).
+// The walk, retried with rounding noise snapped and the plane across the ray turned when it
+// could not start only by the tie rule or by that noise (walk_any_side).
 Trace walk_to_light(int v, vec3 x, vec3 d, float seg_length, bool use_cache) {
   set_frame(x, d);
   g_quarter = 0;
+  g_snap = false;
   Trace first = walk(v, seg_length, use_cache);
   if (!first.grazed) return first;
   if (use_cache) start_tet[v] = -1;
-  for (g_quarter = 1; g_quarter <= 3; ++g_quarter) {
+  g_snap = true;
+  for (g_quarter = 0; g_quarter <= 3; ++g_quarter) {
     Trace t = walk(v, seg_length, false);
     if (t.tet >= 0) return t;
   }

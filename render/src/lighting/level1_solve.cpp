@@ -93,8 +93,8 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 }
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
-  // This runs as one piece of a frame budget, so every stage is parallel: keys, the sort (two
-  // halves, then a merge), the Morton codes and the sorts within groups.
+  // This runs as one piece of a frame budget, so it avoids sorting all points: keys, slabs by a
+  // bucket count, Morton codes and the sorts within slabs.
   const std::size_t np = mesh.points.size();
   const Vec3d u = light.kind == Light::Kind::directional ? normalize(light.vector) : Vec3d{};
   std::vector<double> key(np);
@@ -102,30 +102,23 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
     for (std::size_t p = b; p < e; ++p)
       key[p] = light.kind == Light::Kind::directional ? dot(mesh.points[p], u) : length(mesh.points[p] - light.vector);
   });
-  std::vector<std::pair<double, std::int32_t>> keyed;
-  keyed.reserve(np);
+  // Groups are the slabs [k0 + g h / 2, k0 + (g + 1) h / 2) of the key (k0 its smallest value),
+  // so a bucket count replaces a sort of all points.
+  std::vector<std::int32_t> used;
+  used.reserve(np);
+  double k0 = HUGE_VAL, k1 = -HUGE_VAL;
   for (std::size_t p = 0; p < np; ++p)
-    if (topology.tet_offsets[p] != topology.tet_offsets[p + 1]) keyed.emplace_back(key[p], static_cast<std::int32_t>(p));
-  // (key, id) pairs are all distinct, so the halves sorted apart and merged give std::sort's order.
-  const auto middle = keyed.begin() + static_cast<std::ptrdiff_t>(keyed.size() / 2);
-  parallel_for(2, 1, [&](std::size_t h, std::size_t) {
-    if (h == 0)
-      std::sort(keyed.begin(), middle);
-    else
-      std::sort(middle, keyed.end());
-  });
-  std::inplace_merge(keyed.begin(), middle, keyed.end());
-  VertexOrder order;
-  order.vertices.reserve(keyed.size());
-  double group_start = -HUGE_VAL;
-  for (std::size_t i = 0; i < keyed.size(); ++i) {
-    if (keyed[i].first >= group_start + 0.5 * step) {
-      if (i > 0) order.group_end.push_back(i);
-      group_start = keyed[i].first;
+    if (topology.tet_offsets[p] != topology.tet_offsets[p + 1]) {
+      used.push_back(static_cast<std::int32_t>(p));
+      k0 = std::min(k0, key[p]);
+      k1 = std::max(k1, key[p]);
     }
-    order.vertices.push_back(keyed[i].second);
-  }
-  if (!keyed.empty()) order.group_end.push_back(keyed.size());
+  VertexOrder order;
+  order.group_of.assign(np, -1);
+  if (used.empty()) return order;
+  const double width = 0.5 * step;
+  const auto slab_of = [&](std::size_t p) { return static_cast<std::size_t>(std::floor((key[p] - k0) / width)); };
+  const double span = (k1 - k0) / width;
   // Within a group any order is valid; a Morton (Z-order) curve of 20 bits per axis keeps the
   // walks of consecutive vertices in the same part of the mesh, and so of memory (sorted by key
   // they would jump across the whole slab).
@@ -141,19 +134,40 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
       codes[p] = code;
     }
   });
-  const std::size_t groups = order.group_end.size();
-  order.group_of.assign(np, -1);
-  parallel_for(groups, 64, [&](std::size_t gb, std::size_t ge) {
-    for (std::size_t g = gb; g < ge; ++g) {
-      const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
-      std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(begin),
-                order.vertices.begin() + static_cast<std::ptrdiff_t>(end), [&](std::int32_t a, std::int32_t b) {
-                  return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
-                });
-      for (std::size_t i = begin; i < end; ++i)
-        order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
-    }
-  });
+  const auto by_code = [&](std::int32_t a, std::int32_t b) {
+    return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
+  };
+  order.vertices.resize(used.size());
+  if (!(span < 2.0 * static_cast<double>(used.size()))) {
+    // Steps far below the point spacing (a user's choice): more slabs than points, so sort.
+    order.vertices = used;
+    std::sort(order.vertices.begin(), order.vertices.end(), [&](std::int32_t a, std::int32_t b) {
+      const std::size_t sa = slab_of(static_cast<std::size_t>(a)), sb = slab_of(static_cast<std::size_t>(b));
+      return sa != sb ? sa < sb : by_code(a, b);
+    });
+    for (std::size_t i = 0; i < order.vertices.size(); ++i)
+      if (i + 1 == order.vertices.size() || slab_of(static_cast<std::size_t>(order.vertices[i])) !=
+                                                slab_of(static_cast<std::size_t>(order.vertices[i + 1])))
+        order.group_end.push_back(i + 1);
+  } else {
+    std::vector<std::size_t> start(static_cast<std::size_t>(span) + 2, 0);
+    for (std::int32_t p : used) ++start[slab_of(static_cast<std::size_t>(p)) + 1];
+    for (std::size_t g = 1; g < start.size(); ++g) start[g] += start[g - 1];
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::int32_t p : used) order.vertices[fill[slab_of(static_cast<std::size_t>(p))]++] = p;
+    for (std::size_t g = 1; g < start.size(); ++g)
+      if (start[g] > start[g - 1]) order.group_end.push_back(start[g]);
+    parallel_for(order.group_end.size(), 16, [&](std::size_t gb, std::size_t ge) {
+      for (std::size_t g = gb; g < ge; ++g) {
+        const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1];
+        std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(begin),
+                  order.vertices.begin() + static_cast<std::ptrdiff_t>(order.group_end[g]), by_code);
+      }
+    });
+  }
+  for (std::size_t g = 0, begin = 0; g < order.group_end.size(); begin = order.group_end[g++])
+    for (std::size_t i = begin; i < order.group_end[g]; ++i)
+      order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
   order.path_length.assign(np, 0.0);
   parallel_for(np, 4096, [&](std::size_t b, std::size_t e) {
     for (std::size_t p = b; p < e; ++p) order.path_length[p] = box_path_length(mesh.bounds, mesh.points[p], light);
@@ -213,57 +227,70 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     return interpolate_light(w, values, path, walk.path, corner, u);
   };
 
-  auto update = [&](std::int32_t v) -> float {
-    const Vec3d& x = mesh.points[static_cast<std::size_t>(v)];
+  // A vertex being updated: its ray towards the light and, once walked or replayed, the trace.
+  struct Pending {
+    std::int32_t v;
+    Vec3d d;
+    double len;
+    bool reaches_light;
+    Trace tr;
+  };
+  // The ray of vertex v; false when its value needs no walk (then written to next).
+  auto begin_update = [&](std::int32_t v, Pending& p) -> bool {
+    const auto vv = static_cast<std::size_t>(v);
+    const Vec3d& x = mesh.points[vv];
     for (const Bounds& box : ctx.occluders)
-      if (inside_box(x, box)) return 0.0f;
-    Vec3d d = back;
-    double len = ctx.step_of(static_cast<std::size_t>(v));
-    bool reaches_light = false;
+      if (inside_box(x, box)) {
+        state.next[vv] = 0.0f;
+        return false;
+      }
+    p = {v, back, ctx.step_of(vv), false, {}};
     if (point) {
       const Vec3d r = light.vector - x;
       const double dist = length(r);
-      if (dist == 0.0) return 1.0f;
-      d = r / dist;
+      if (dist == 0.0) {
+        state.next[vv] = 1.0f;
+        return false;
+      }
+      p.d = r / dist;
       // Near the light rho has a cone tip no interpolation follows: walk the rest of the way.
-      if (dist <= 2.0 * len) {
-        len = dist;
-        reaches_light = true;
+      if (dist <= 2.0 * p.len) {
+        p.len = dist;
+        p.reaches_light = true;
       }
     }
-    const auto vv = static_cast<std::size_t>(v);
-    thread_local RecordedWalk unrecorded;  // walks are not kept: this one lives for one vertex
-    RecordedWalk& walk = state.walks.empty() ? unrecorded : state.walks[vv];
-    if (state.walks.empty()) walk.valid = false;
-    Trace tr;
-    if (walk.valid) {
-      // The same walk as last time: only the extinction along it is new.
-      int piece_hint = -1;
-      for (const WalkSegment& seg : walk.segments)
-        tr.depth += segment_depth(ctx, seg.slot, x, d, seg.ta, seg.tb, piece_hint);
-      tr.kind = static_cast<Trace::Kind>(walk.kind);
-      tr.tet = walk.tet;
-      tr.end = tr.kind == Trace::Kind::inside ? len : static_cast<double>(walk.end);
-    } else {
-      // Walked into a scratch list and copied once: growing each vertex's own list step by step
-      // cost several allocations per vertex, a large share of a first pass.
-      thread_local std::vector<WalkSegment> walked;
-      walked.clear();
-      tr = walk_to_light(walk_input, v, x, d, len, &state.start_tet[vv], &walked);
-      walk.segments.assign(walked.begin(), walked.end());
-      walk.tet = tr.tet;
-      walk.kind = static_cast<std::uint8_t>(tr.kind);
-      walk.end = static_cast<float>(tr.end);
-      for (int k = 0; k < 4; ++k) walk.weights[k] = tr.weights[k];
-      walk.has_path = false;
-      walk.valid = tr.kind != Trace::Kind::lost;
-      if (!walk.valid) walk.segments = {};
-    }
-    Vec3d end = x + d * tr.end;
+    return true;
+  };
+  // The same walk as last time: only the extinction along it is new.
+  auto replay = [&](Pending& p, const RecordedWalk& walk) {
+    const Vec3d& x = mesh.points[static_cast<std::size_t>(p.v)];
+    int piece_hint = -1;
+    for (const WalkSegment& seg : walk.segments)
+      p.tr.depth += segment_depth(ctx, seg.slot, x, p.d, seg.ta, seg.tb, piece_hint);
+    p.tr.kind = static_cast<Trace::Kind>(walk.kind);
+    p.tr.tet = walk.tet;
+    p.tr.end = p.tr.kind == Trace::Kind::inside ? p.len : static_cast<double>(walk.end);
+  };
+  auto keep_walk = [&](const Trace& tr, const std::vector<WalkSegment>& walked, RecordedWalk& walk) {
+    walk.segments.assign(walked.begin(), walked.end());
+    walk.tet = tr.tet;
+    walk.kind = static_cast<std::uint8_t>(tr.kind);
+    walk.end = static_cast<float>(tr.end);
+    for (int k = 0; k < 4; ++k) walk.weights[k] = tr.weights[k];
+    walk.has_path = false;
+    walk.valid = tr.kind != Trace::Kind::lost;
+    if (!walk.valid) walk.segments = {};
+  };
+  // The new value of a vertex from its trace.
+  auto end_update = [&](Pending& p, RecordedWalk& walk) -> float {
+    const auto vv = static_cast<std::size_t>(p.v);
+    const Vec3d& x = mesh.points[vv];
+    Trace& tr = p.tr;
+    Vec3d end = x + p.d * tr.end;
     double upstream = 0.0;
     state.departure_tet[vv] = -1;
     state.stale[vv] = 0;
-    if (tr.kind == Trace::Kind::inside && !reaches_light) {
+    if (tr.kind == Trace::Kind::inside && !p.reaches_light) {
       state.departure_tet[vv] = tr.tet;
       // A corner not in an earlier group was read before its update in this pass.
       for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(tr.tet)].v)
@@ -274,15 +301,15 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       // rare, and it depends on the values).
       if (std::isnan(upstream)) {
         walk.valid = false;
-        tr = walk_to_light(walk_input, v, x, d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
-        end = x + d * tr.end;
+        tr = walk_to_light(walk_input, p.v, x, p.d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
+        end = x + p.d * tr.end;
         state.departure_tet[vv] = -1;
         state.stale[vv] = 0;
       }
     }
     switch (tr.kind) {
       case Trace::Kind::inside:
-        if (reaches_light || std::isnan(upstream)) upstream = 1.0;
+        if (p.reaches_light || std::isnan(upstream)) upstream = 1.0;
         break;
       case Trace::Kind::left_mesh:
         upstream = ctx.grid.sample_prefer_outside(rho0, end);
@@ -296,9 +323,17 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       if (segment_meets_box(x, end, box)) return 0.0f;
     return static_cast<float>(flush(upstream * std::exp(-ctx.sigma_a * tr.depth)));
   };
-
-  double residual = state.residual;
   auto run = [&](std::size_t b, std::size_t e) {
+    // In three phases, so that the fresh walks of the vertices run together (walk_batch keeps
+    // several in flight and their memory loads overlap).
+    thread_local std::vector<Pending> pending;
+    thread_local std::vector<WalkJob> jobs;
+    thread_local std::vector<std::size_t> job_of;  // the pending entry of each job
+    thread_local std::vector<std::vector<WalkSegment>> walked;
+    thread_local std::vector<RecordedWalk> unrecorded;  // walks not kept: these live for one call
+    pending.clear();
+    jobs.clear();
+    job_of.clear();
     for (std::size_t i = b; i < e; ++i) {
       const std::int32_t v = order.vertices[i];
       const auto vv = static_cast<std::size_t>(v);
@@ -308,29 +343,68 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       if (!recompute && state.departure_tet[vv] >= 0)
         for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(state.departure_tet[vv])].v)
           recompute = recompute || state.changed[static_cast<std::size_t>(c)];
-      state.next[vv] = recompute ? update(v) : rho1[vv];
+      if (!recompute) {
+        state.next[vv] = rho1[vv];
+        continue;
+      }
+      Pending p;
+      if (begin_update(v, p)) pending.push_back(p);
     }
+    const bool keep = !state.walks.empty();
+    if (!keep) {
+      unrecorded.resize(pending.size());
+      for (RecordedWalk& w : unrecorded) w.valid = false;
+    }
+    auto walk_of = [&](std::size_t j) -> RecordedWalk& {
+      return keep ? state.walks[static_cast<std::size_t>(pending[j].v)] : unrecorded[j];
+    };
+    if (walked.size() < pending.size()) walked.resize(pending.size());
+    for (std::size_t j = 0; j < pending.size(); ++j) {
+      Pending& p = pending[j];
+      const RecordedWalk& walk = walk_of(j);
+      if (walk.valid) {
+        replay(p, walk);
+        continue;
+      }
+      walked[jobs.size()].clear();
+      jobs.push_back({p.v, mesh.points[static_cast<std::size_t>(p.v)], p.d, p.len,
+                      &state.start_tet[static_cast<std::size_t>(p.v)], &walked[jobs.size()], {}});
+      job_of.push_back(j);
+    }
+    walk_batch(walk_input, jobs.data(), jobs.size());
+    for (std::size_t k = 0; k < jobs.size(); ++k) {
+      pending[job_of[k]].tr = jobs[k].trace;
+      keep_walk(jobs[k].trace, walked[k], walk_of(job_of[k]));
+    }
+    for (std::size_t j = 0; j < pending.size(); ++j)
+      state.next[static_cast<std::size_t>(pending[j].v)] = end_update(pending[j], walk_of(j));
   };
-  // Groups in order; a group's vertices in batches, in parallel within a batch. The deadline is
-  // checked between batches (always doing at least one): the vertices of a group read only
-  // earlier groups' final values, so a group may be finished on the next call; its new values
-  // are published when its last batch is done.
+  double residual = state.residual;
+  // Groups in order; a group's vertices in batches, in parallel within a batch. Between batches
+  // (always doing at least one) the next starts only if it is expected to end by the deadline:
+  // the vertices of a group read only earlier groups' final values, so a group may be finished
+  // on the next call; its new values are published when its last batch is done.
   bool first_batch = true;
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
     for (std::size_t b = std::max(begin, state.next_vertex); b < end; b += kBatch) {
-      if (!first_batch && std::chrono::steady_clock::now() >= deadline) {
+      const std::size_t e = std::min(end, b + kBatch);
+      const auto now = std::chrono::steady_clock::now();
+      const auto expected = std::chrono::duration<double, std::milli>(std::max(0.0, state.vertex_ms) * static_cast<double>(e - b));
+      if (!first_batch && now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(expected) >= deadline) {
         state.next_group = g;
         state.next_vertex = b;
         state.residual = residual;
         return false;
       }
       first_batch = false;
-      const std::size_t e = std::min(end, b + kBatch);
       if (e - b < 256)
         run(b, e);
       else
         parallel_for(e - b, 64, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });
+      const double per_vertex =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count() / static_cast<double>(e - b);
+      state.vertex_ms = state.vertex_ms < 0 ? per_vertex : 0.5 * (state.vertex_ms + per_vertex);
     }
     state.next_vertex = 0;
     for (std::size_t i = begin; i < end; ++i) {

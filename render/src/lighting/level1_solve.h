@@ -62,9 +62,11 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 /// |component of its gradient normal to u| times the tet's longest edge.
 double transverse_change(const Vec3d p[4], const double value[4], const Vec3d& u);
 
-/// Vertices sorted along the light (directional: by x . u; point: by distance from the light),
-/// cut into groups no thicker than step / 2: a departure point lies a full step upstream, so the
-/// tet holding it has its vertices in earlier groups unless it is thicker than step / 2.
+/// Vertices grouped along the light by their key (directional: x . u; point: distance from the
+/// light) into the slabs [k0 + g step / 2, k0 + (g + 1) step / 2), k0 the smallest key, empty
+/// slabs left out: a departure point lies a full step upstream, so the tet holding it has its
+/// vertices in earlier groups unless it is thicker than step / 2. Within a group, vertices follow
+/// a Morton curve.
 struct VertexOrder {
   std::vector<std::int32_t> vertices;
   std::vector<std::size_t> group_end;
@@ -101,6 +103,9 @@ struct PassState {
   bool in_pass = false, full = false;
   std::size_t next_group = 0, next_vertex = 0;
   double residual = 0.0;  ///< largest change of the pass so far / of the last finished pass
+  /// Recent time per vertex of a batch (ms; < 0: none timed yet): a batch starts only if it is
+  /// expected to end by the deadline. Kept across clear().
+  double vertex_ms = -1.0;
   void clear() {
     departure_tet.clear();
     in_pass = false;
@@ -114,8 +119,9 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
 /// rho(x_d) interpolated in level 1 (interpolate_light), the level-0 value where the walk left
 /// the mesh, 1 at the light. The first pass after a reset computes every vertex; later passes
 /// only the stale ones and those whose departure corners changed in this pass (the others would
-/// reproduce their value exactly). A pass stops between batches of vertices once `deadline` has
-/// passed and resumes there on the next call; returns true when the pass finished, its largest change then
+/// reproduce their value exactly). A pass stops between batches of vertices when the next is not
+/// expected to end by `deadline` (state.vertex_ms; one batch always runs) and resumes there on
+/// the next call; returns true when the pass finished, its largest change then
 /// in state.residual. `lost` counts walks that hit their move cap.
 bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
                  const VertexOrder& order, std::vector<float>& rho1, PassState& state, std::atomic<std::size_t>& lost,

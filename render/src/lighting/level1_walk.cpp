@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "penumbra/core/thread_pool.h"
 
@@ -16,6 +17,13 @@ using detail::kExitX;
 using detail::kFaceVertices;
 using detail::Projected;
 using detail::WalkTet;
+
+// Edge values within this fraction of the edge's squared size (|q_a|^2 + |q_b|^2 in the plane)
+// are rounding noise around an exact zero: a ray that really runs along an edge or a face (an
+// axis-aligned or diagonal light on a structured mesh) is projected through an irrational frame,
+// and its edge values come out as +-1e-17 instead of 0. A walk that could not start by such
+// noise is retried with them snapped to 0 (walk_any_side), where the tie rule decides.
+constexpr double kSnap = 1e-12;
 
 // A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
 // a degenerate configuration (it then falls back to level 0 and is counted).
@@ -42,15 +50,18 @@ struct ConvergingRays {
   double scalar(std::int32_t id) const { return scalars[id]; }
 };
 
-// The rays turned by a quarter turn (1, 2 or 3) in the plane across them. The tie rule displaces
+// The rays turned by a quarter turn (0 to 3) in the plane across them. The tie rule displaces
 // every ray by (eps, eps^2) in its plane; turning the plane turns that displacement, so each
-// quarter pushes a ray lying in the mesh boundary to another side of it (see walk_to_light).
+// quarter pushes a ray lying in the mesh boundary to another side of it (see walk_any_side).
+// (Turning by quarters is exact: it permutes and negates coordinates, and every edge value
+// keeps its products.)
 template <class Rays>
 struct TurnedRays {
   Rays rays;
   int quarter;
   Projected at(std::int32_t id) const {
     const Projected p = rays.at(id);
+    if (quarter == 0) return p;
     if (quarter == 1) return {-p.y, p.x, p.depth};
     if (quarter == 2) return {-p.x, -p.y, p.depth};
     return {p.y, -p.x, p.depth};
@@ -84,142 +95,192 @@ Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected 
   return c;
 }
 
-// The walk for one set of rays. `grazed` is set when it cannot start only by the tie rule: the
-// unperturbed ray touches a face of v's star opposite v on its rim, so it runs along the
-// boundary of the closed mesh.
+// One walk for one set of rays, resumable step by step so that a thread can keep several in
+// flight (walk_batch): each step's loads then overlap other walks' work instead of stalling.
+// `grazed` is set when it cannot start only by the tie rule: the unperturbed ray touches a face
+// of v's star opposite v on its rim, so it runs along the boundary of the closed mesh.
 template <class Rays>
-Trace walk(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
-           std::vector<WalkSegment>* record, bool& grazed) {
-  Trace tr;
-  grazed = false;
-  if (start && *start == -2) {
-    tr.kind = Trace::Kind::left_mesh;
-    return tr;
-  }
-  // The start: the record of v's star whose face opposite v the ray leaves through, i.e. whose
-  // outward edges all have positive values.
-  Crossing out{};
-  auto leaves_through = [&](const std::int32_t face[3]) {
-    Projected q[3];
-    for (int j = 0; j < 3; ++j) {
-      out.id[j] = face[j];
-      q[j] = rays.at(face[j]);
+class Walker {
+public:
+  Walker(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::vector<WalkSegment>* record,
+         bool snap = false)
+      : m_in(in), m_rays(rays), m_v(v), m_length(length), m_record(record), m_snap(snap) {}
+
+  // Finds the start; false: the walk is already over (see trace()).
+  bool start(std::int32_t* cache) {
+    if (cache && *cache == -2) {
+      m_tr.kind = Trace::Kind::left_mesh;
+      return false;
     }
+    if (cache && *cache >= 0) {
+      m_slot = *cache >> 2;
+      m_k = *cache & 3;
+      const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
+      const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
+      (void)leaves_through(face);  // known to hold: only the crossing is wanted
+    } else {
+      const auto s_end = m_in.star_offsets[static_cast<std::size_t>(m_v) + 1];
+      for (auto s = m_in.star_offsets[static_cast<std::size_t>(m_v)]; s < s_end; ++s) {
+        const StarFace& f = m_in.star[static_cast<std::size_t>(s)];
+        if (leaves_through(f.v)) {
+          m_slot = f.record >> 2;
+          m_k = f.record & 3;
+          break;
+        }
+      }
+      if (cache) *cache = m_slot < 0 ? -2 : (m_slot << 2 | m_k);
+      if (m_slot < 0) {
+        m_tr.kind = Trace::Kind::left_mesh;
+        return false;
+      }
+    }
+    m_grazed = false;
+    m_enter = {{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)};
+    m_next = m_in.tets[static_cast<std::size_t>(m_slot)].next[m_k];
+    if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
+    return true;
+  }
+
+  // Integrates the current tet's segment and moves on; false: the walk is over.
+  bool step() {
+    if (m_out.t >= m_length) {
+      finish_inside();
+      return false;
+    }
+    m_tr.depth += m_in.table.integral(m_enter.s, m_out.s, m_out.t - m_enter.t, &m_piece_hint);
+    if (m_record) m_record->push_back({m_slot, static_cast<float>(m_enter.t), static_cast<float>(m_out.t)});
+    if (m_next < 0) {
+      m_tr.kind = Trace::Kind::left_mesh;
+      m_tr.tet = m_slot;
+      m_tr.end = m_out.t;
+      return false;
+    }
+    if (++m_moves >= kMaxMoves) {
+      m_tr.kind = Trace::Kind::lost;
+      m_tr.tet = m_slot;
+      m_tr.end = m_length;
+      return false;
+    }
+    // The next tet, entered through face k: leave through the face (D, X, Y) picked by the signs
+    // of the edges from D, the vertex opposite the entry.
+    m_slot = m_next >> 2;
+    m_k = m_next & 3;
+    m_enter = m_out;
+    const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
+    const int* abc = kAbc[m_k];
+    const std::int32_t id[4] = {w.v[m_k], w.v[abc[0]], w.v[abc[1]], w.v[abc[2]]};  // D, A, B, C
+    Projected q[4];
+    for (int j = 0; j < 4; ++j) q[j] = m_rays.at(id[j]);
+    double e_d[4];
+    int pattern = 0;
+    for (int j = 1; j < 4; ++j) {
+      e_d[j] = edge(q[0], id[0], q[j], id[j]);
+      pattern |= static_cast<int>(edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
+    }
+    const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;
+    m_next = w.next[abc[5 - x - y]];
+    if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
+    const double w3[3] = {std::max(0.0, edge(q[x], id[x], q[y], id[y])), std::max(0.0, -e_d[y]),
+                          std::max(0.0, e_d[x])};
+    const std::int32_t face[3] = {id[0], id[x], id[y]};
+    const Projected face_q[3] = {q[0], q[x], q[y]};
+    m_out = cross_face(m_rays, face, face_q, w3, m_enter.t, m_enter.s);
+    return true;
+  }
+
+  const Trace& trace() const { return m_tr; }
+  bool grazed() const { return m_grazed; }
+
+private:
+  // An edge value; snapped to 0 within kSnap of its size when retrying (symmetric in a and b, so
+  // every tet of the edge still sees the same value).
+  double edge(const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) const {
+    const double e = edge_value(a, ia, b, ib);
+    return m_snap && std::fabs(e) <= noise(a, b) ? 0.0 : e;
+  }
+  static double noise(const Projected& a, const Projected& b) {
+    return kSnap * (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y);
+  }
+
+  // The start: whether the ray leaves through the face opposite v (outward order), i.e. all its
+  // outward edges have positive values; sets the crossing.
+  bool leaves_through(const std::int32_t face[3]) {
+    Projected q[3];
+    for (int j = 0; j < 3; ++j) q[j] = m_rays.at(face[j]);
     double e[3];
     bool positive = true;
     for (int j = 0; j < 3; ++j) {
       const int a = (j + 1) % 3, b = (j + 2) % 3;  // e(b, c) weighs a, and cyclically
-      e[j] = edge_value(q[a], out.id[a], q[b], out.id[b]);
-      positive = positive && edge_positive(e[j], q[a], out.id[a], q[b], out.id[b]);
+      e[j] = edge(q[a], face[a], q[b], face[b]);
+      positive = positive && edge_positive(e[j], q[a], face[a], q[b], face[b]);
     }
     if (!positive) {
-      grazed = grazed || (e[0] >= 0 && e[1] >= 0 && e[2] >= 0);
+      // Touched on its rim, up to rounding noise: the ray runs along the boundary.
+      bool touched = true;
+      for (int j = 0; j < 3; ++j) touched = touched && e[j] >= -noise(q[(j + 1) % 3], q[(j + 2) % 3]);
+      m_grazed = m_grazed || touched;
       return false;
     }
     const double w3[3] = {std::max(0.0, e[0]), std::max(0.0, e[1]), std::max(0.0, e[2])};
-    out = cross_face(rays, out.id, q, w3, 0.0, rays.scalar(v));
+    m_out = cross_face(m_rays, face, q, w3, 0.0, m_rays.scalar(m_v));
     return true;
-  };
-  std::int32_t slot = -1;
-  int k = -1;
-  if (start && *start >= 0) {
-    slot = *start >> 2;
-    k = *start & 3;
-    const WalkTet& w = in.tets[static_cast<std::size_t>(slot)];
-    const std::int32_t face[3] = {w.v[kFaceVertices[k][0]], w.v[kFaceVertices[k][1]], w.v[kFaceVertices[k][2]]};
-    (void)leaves_through(face);  // known to hold: only the crossing is wanted
-    grazed = false;
-  } else {
-    const auto s_end = in.star_offsets[static_cast<std::size_t>(v) + 1];
-    for (auto s = in.star_offsets[static_cast<std::size_t>(v)]; s < s_end; ++s) {
-      const StarFace& f = in.star[static_cast<std::size_t>(s)];
-      if (leaves_through(f.v)) {
-        slot = f.record >> 2;
-        k = f.record & 3;
-        break;
-      }
-    }
-    if (slot >= 0) grazed = false;
-    if (start) *start = slot < 0 ? -2 : (slot << 2 | k);
-    if (slot < 0) {
-      tr.kind = Trace::Kind::left_mesh;
-      return tr;
-    }
   }
 
-  // The segment inside the current tet runs from `enter` to `out`; v itself enters the first.
-  Crossing enter{{v, v, v}, {1, 0, 0}, 0.0, rays.scalar(v)};
-  int piece_hint = -1;
-  std::int32_t next = in.tets[static_cast<std::size_t>(slot)].next[k];
-  for (int move = 0; move < kMaxMoves; ++move) {
-    if (out.t >= length) {
-      // The departure point: between the two crossings, weights interpolated likewise.
-      const WalkTet& w = in.tets[static_cast<std::size_t>(slot)];
-      const double f = out.t > enter.t ? (length - enter.t) / (out.t - enter.t) : 0.0;
-      double weight[4] = {0, 0, 0, 0}, sum = 0;
-      for (int j = 0; j < 4; ++j) {
-        for (int c = 0; c < 3; ++c) {
-          if (enter.id[c] == w.v[j]) weight[j] += (1 - f) * enter.mu[c];
-          if (out.id[c] == w.v[j]) weight[j] += f * out.mu[c];
-        }
-        weight[j] = std::max(0.0, weight[j]);
-        sum += weight[j];
+  // The departure point lies in the current tet: between the two crossings, its weights
+  // interpolated likewise.
+  void finish_inside() {
+    const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
+    const double f = m_out.t > m_enter.t ? (m_length - m_enter.t) / (m_out.t - m_enter.t) : 0.0;
+    double weight[4] = {0, 0, 0, 0}, sum = 0;
+    for (int j = 0; j < 4; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        if (m_enter.id[c] == w.v[j]) weight[j] += (1 - f) * m_enter.mu[c];
+        if (m_out.id[c] == w.v[j]) weight[j] += f * m_out.mu[c];
       }
-      for (int j = 0; j < 4; ++j) tr.weights[j] = static_cast<float>(sum > 0 ? weight[j] / sum : 0.25);
-      const double s_end = enter.s + f * (out.s - enter.s);
-      tr.depth += in.table.integral(enter.s, s_end, length - enter.t, &piece_hint);
-      if (record) record->push_back({slot, static_cast<float>(enter.t), static_cast<float>(length)});
-      tr.kind = Trace::Kind::inside;
-      tr.tet = slot;
-      tr.end = length;
-      return tr;
+      weight[j] = std::max(0.0, weight[j]);
+      sum += weight[j];
     }
-    tr.depth += in.table.integral(enter.s, out.s, out.t - enter.t, &piece_hint);
-    if (record) record->push_back({slot, static_cast<float>(enter.t), static_cast<float>(out.t)});
-    if (next < 0) {
-      tr.kind = Trace::Kind::left_mesh;
-      tr.tet = slot;
-      tr.end = out.t;
-      return tr;
-    }
-    // The next tet, entered through face k: leave through the face (D, X, Y) picked by the signs
-    // of the edges from D, the vertex opposite the entry.
-    slot = next >> 2;
-    k = next & 3;
-    enter = out;
-    const WalkTet& w = in.tets[static_cast<std::size_t>(slot)];
-    const int* abc = kAbc[k];
-    const std::int32_t id[4] = {w.v[k], w.v[abc[0]], w.v[abc[1]], w.v[abc[2]]};  // D, A, B, C
-    Projected q[4];
-    for (int j = 0; j < 4; ++j) q[j] = rays.at(id[j]);
-    double e_d[4];
-    int pattern = 0;
-    for (int j = 1; j < 4; ++j) {
-      e_d[j] = edge_value(q[0], id[0], q[j], id[j]);
-      pattern |= static_cast<int>(edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
-    }
-    const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;
-    next = w.next[abc[5 - x - y]];
-    if (next >= 0) __builtin_prefetch(&in.tets[static_cast<std::size_t>(next >> 2)]);
-    const double w3[3] = {std::max(0.0, edge_value(q[x], id[x], q[y], id[y])), std::max(0.0, -e_d[y]),
-                          std::max(0.0, e_d[x])};
-    const std::int32_t face[3] = {id[0], id[x], id[y]};
-    const Projected face_q[3] = {q[0], q[x], q[y]};
-    out = cross_face(rays, face, face_q, w3, enter.t, enter.s);
+    for (int j = 0; j < 4; ++j) m_tr.weights[j] = static_cast<float>(sum > 0 ? weight[j] / sum : 0.25);
+    const double s_end = m_enter.s + f * (m_out.s - m_enter.s);
+    m_tr.depth += m_in.table.integral(m_enter.s, s_end, m_length - m_enter.t, &m_piece_hint);
+    if (m_record) m_record->push_back({m_slot, static_cast<float>(m_enter.t), static_cast<float>(m_length)});
+    m_tr.kind = Trace::Kind::inside;
+    m_tr.tet = m_slot;
+    m_tr.end = m_length;
   }
-  tr.kind = Trace::Kind::lost;
-  tr.tet = slot;
-  tr.end = length;
-  return tr;
+
+  const WalkInput& m_in;
+  Rays m_rays;
+  std::int32_t m_v;
+  double m_length;
+  std::vector<WalkSegment>* m_record;
+  bool m_snap;
+  Trace m_tr;
+  bool m_grazed = false;
+  std::int32_t m_slot = -1, m_next = -1;
+  int m_k = -1, m_piece_hint = -1, m_moves = 0;
+  Crossing m_enter{}, m_out{};  // the segment in the current tet runs from m_enter to m_out
+};
+
+template <class Rays>
+Trace walk(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
+           std::vector<WalkSegment>* record, bool& grazed, bool snap = false) {
+  Walker<Rays> walker(in, rays, v, length, record, snap);
+  if (walker.start(start))
+    while (walker.step()) {
+    }
+  grazed = walker.grazed();
+  return walker.trace();
 }
 
-// The walk as the tie rule has it; when that cannot start only by the rule (a ray from a
-// boundary vertex along the boundary, common on axis-aligned meshes and lights), the other three
-// quarter turns of the displacement are tried, and the first that starts is kept: one of them
-// pushes a ray along a boundary face, or along a convex edge of 90 degrees or more, into the mesh,
-// as the closed mesh holds it. (A ray that meets the boundary later, say along a hole's wall,
-// leaves where the rule says and continues in level 0, as the light does across the hole.)
-// Retried walks are not cached as starts.
+// The walk as the tie rule has it; when that cannot start only by the rule or by rounding noise
+// (a ray from a boundary vertex along the boundary, common on axis-aligned meshes and lights), it
+// is retried with the noise snapped to 0 and the tie rule's displacement turned by 0 to 3
+// quarters, and the first that starts is kept: one of them pushes a ray along a boundary face,
+// or along a convex edge of 90 degrees or more, into the mesh, as the closed mesh holds it. (A
+// ray that meets the boundary later, say along a hole's wall, leaves where the rule says and
+// continues in level 0, as the light does across the hole.) Retried walks are not cached as
+// starts.
 template <class Rays>
 Trace walk_any_side(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
                     std::vector<WalkSegment>* record) {
@@ -227,16 +288,69 @@ Trace walk_any_side(const WalkInput& in, const Rays& rays, std::int32_t v, doubl
   const Trace first = walk(in, rays, v, length, start, record, grazed);
   if (!grazed) return first;
   if (start) *start = -1;
-  for (int quarter = 1; quarter <= 3; ++quarter) {
+  for (int quarter = 0; quarter <= 3; ++quarter) {
     if (record) record->clear();
-    const Trace t = walk(in, TurnedRays<Rays>{rays, quarter}, v, length, nullptr, record, grazed);
+    const Trace t = walk(in, TurnedRays<Rays>{rays, quarter}, v, length, nullptr, record, grazed, true);
     if (t.tet >= 0) return t;
   }
   if (record) record->clear();
   return first;
 }
 
+// Walks in flight per thread in walk_batch.
+constexpr int kInFlight = 8;
+
+template <class Rays, class MakeRays>
+void walk_interleaved(const WalkInput& in, WalkJob* jobs, std::size_t count, const MakeRays& make_rays) {
+  std::optional<Walker<Rays>> walkers[kInFlight];
+  std::size_t job_of[kInFlight] = {};
+  std::size_t next_job = 0;
+  // A walk over (or one that could not start only by the tie rule: retried in full) gives its
+  // job's result.
+  auto finish = [&](WalkJob& job, const Walker<Rays>& w) {
+    if (!w.grazed()) {
+      job.trace = w.trace();
+      return;
+    }
+    if (job.start) *job.start = -1;
+    if (job.record) job.record->clear();
+    job.trace = walk_any_side(in, make_rays(job), job.v, job.length, job.start, job.record);
+  };
+  // Starts the next job that does not end at its start in slot k; false when none is left.
+  auto launch = [&](int k) {
+    while (next_job < count) {
+      WalkJob& job = jobs[next_job++];
+      walkers[k].emplace(in, make_rays(job), job.v, job.length, job.record);
+      if (walkers[k]->start(job.start)) {
+        job_of[k] = static_cast<std::size_t>(&job - jobs);
+        return true;
+      }
+      finish(job, *walkers[k]);
+    }
+    walkers[k].reset();
+    return false;
+  };
+  int active = 0;
+  for (int k = 0; k < kInFlight; ++k) active += launch(k) ? 1 : 0;
+  while (active > 0)
+    for (int k = 0; k < kInFlight; ++k) {
+      if (!walkers[k] || walkers[k]->step()) continue;
+      finish(jobs[job_of[k]], *walkers[k]);
+      if (!launch(k)) --active;
+    }
+}
+
 }  // namespace
+
+void walk_batch(const WalkInput& in, WalkJob* jobs, std::size_t count) {
+  if (in.parallel)
+    walk_interleaved<ParallelRays>(in, jobs, count,
+                                   [&](const WalkJob& j) { return ParallelRays{in.parallel, in.parallel[j.v]}; });
+  else
+    walk_interleaved<ConvergingRays>(in, jobs, count, [&](const WalkJob& j) {
+      return ConvergingRays{detail::RayFrame(j.x, j.d), in.points, in.scalars};
+    });
+}
 
 void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vector<float>& scalars,
                       std::vector<ParallelPoint>& out) {

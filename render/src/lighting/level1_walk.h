@@ -67,4 +67,19 @@ struct WalkInput {
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
                     std::int32_t* start = nullptr, std::vector<WalkSegment>* record = nullptr);
 
+/// One walk of a batch: walk_to_light's arguments and, after walk_batch, its result.
+struct WalkJob {
+  std::int32_t v;
+  Vec3d x, d;
+  double length;
+  std::int32_t* start;
+  std::vector<WalkSegment>* record;
+  Trace trace;
+};
+
+/// walk_to_light for every job, with several walks in flight per call: a walk step waits on
+/// memory (the next tet, its new point), so the steps of different walks are interleaved and
+/// their loads overlap. Every job's result equals walk_to_light's.
+void walk_batch(const WalkInput& in, WalkJob* jobs, std::size_t count);
+
 }  // namespace penumbra::render::lighting
