@@ -15,4 +15,10 @@ std::vector<std::int32_t> morton_order(const TetMesh& mesh);
 /// Point ids sorted by the Morton code of the points (same code as morton_order).
 std::vector<std::int32_t> morton_point_order(const TetMesh& mesh);
 
+/// The mesh with its points renumbered: point i of the result is point order[i] of `mesh` (order
+/// a permutation, e.g. morton_point_order), the tets' point ids mapped alike. Tets, neighbours,
+/// boundary faces and bounds are unchanged; the boundary surface is left out (it names the old
+/// ids).
+TetMesh with_points_in_order(const TetMesh& mesh, const std::vector<std::int32_t>& order);
+
 }  // namespace penumbra::render::detail

@@ -10,6 +10,7 @@
 #include "gpu_light_solver.h"
 #include "level0_grid.h"
 #include "level0_sweep.h"
+#include "tet_order.h"
 #include "level1_mesh.h"
 #include "level1_solve.h"
 #include "light_scattering.h"
@@ -69,7 +70,8 @@ struct LightVolume::Impl {
     enum class Stage { level0, level1, done } stage = Stage::level0;
     std::vector<float> rho0;         // per level-0 node
     std::vector<float> rho0_vertex;  // level 0 at the mesh points (initial values; warm-start reference)
-    std::vector<float> rho1;         // per mesh point
+    std::vector<float> rho1;         // per mesh point (the solver's order, see point_order)
+    std::vector<float> rho1_out;     // rho1 in the caller's point order (light_rho)
     lighting::VertexOrder order;
     lighting::PassState pass_state;
     bool order_valid = false;
@@ -89,7 +91,14 @@ struct LightVolume::Impl {
     }
   };
 
+  // The caller's mesh with its points renumbered along a Morton curve: the walks, the scattering
+  // and every per-point array run in that order, where the points of nearby tets sit nearby in
+  // memory (in the input's order a walk step missed the cache on most points; 14 % faster at 1M
+  // tets). Point i here is the caller's point point_order[i]; results are copied back to the
+  // caller's order after every update.
   std::shared_ptr<const TetMesh> mesh;
+  std::vector<std::int32_t> point_order;
+  std::vector<float> rgb_out;  // rgb in the caller's point order (light_rgb)
   LightVolumeOptions opt;
   lighting::Level1Topology topology;
   std::vector<float> scatter_weights;
@@ -130,6 +139,20 @@ struct LightVolume::Impl {
     resample_pending = has_field;
     mark_all();
     for (auto& l : lights) l.forget_direction();  // the step sets the vertex groups
+  }
+  // The results in the caller's point order.
+  void publish() {
+    const std::size_t np = point_order.size();
+    rgb_out.resize(3 * np);
+    for (auto& l : lights) l.rho1_out.resize(l.rho1.size());
+    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const auto p = static_cast<std::size_t>(point_order[i]);
+        for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
+        for (auto& l : lights)
+          if (!l.rho1.empty()) l.rho1_out[p] = l.rho1[i];
+      }
+    });
   }
   void mark_all() {
     for (auto& l : lights) l.stage = LightState::Stage::level0;
@@ -271,7 +294,8 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   require(!mesh->tets.empty(), "LightVolume: the mesh has no tets; expected at least one");
   check_options(options);
   Impl& im = *m_impl;
-  im.mesh = std::move(mesh);
+  im.point_order = detail::morton_point_order(*mesh);
+  im.mesh = std::make_shared<const TetMesh>(detail::with_points_in_order(*mesh, im.point_order));
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
   im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
@@ -281,6 +305,7 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
                                                         im.opt.occluders);
   im.build_grid();
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
+  im.rgb_out = im.rgb;
 }
 
 LightVolume::~LightVolume() = default;
@@ -293,7 +318,8 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
           "LightVolume::set_field: point_scalars has " + std::to_string(point_scalars.size()) +
               " values but the mesh has " + std::to_string(im.mesh->points.size()) + " points; expected one per point");
   tf.validate();
-  im.scalars = point_scalars;
+  im.scalars.resize(point_scalars.size());
+  for (std::size_t i = 0; i < im.scalars.size(); ++i) im.scalars[i] = point_scalars[static_cast<std::size_t>(im.point_order[i])];
   im.field.build(*im.mesh, im.topology, im.scalars, tf);
   im.has_field = true;
   im.resample_pending = true;
@@ -398,10 +424,12 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
       did_work = true;
     }
+  bool combined = false;
   if (im.combine_pending) {
     const auto tc = Clock::now();
     im.combine();
     im.last_combine_ms = ms_since(tc);
+    combined = true;
   }
   // Scattering waits for the lights: every level-1 pass changes its source and restarts it, so
   // iterations run before the last pass would be thrown away. Until then light_rgb() holds the
@@ -473,15 +501,16 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       report.residual = std::max(report.residual, l.residual);
     }
   if (!im.scatter_converged) report.residual = std::max(report.residual, im.scatter_residual);
+  if (did_work || combined) im.publish();
   report.total_ms = ms_since(t0);
   return report;
 }
 
-const std::vector<float>& LightVolume::light_rgb() const { return m_impl->rgb; }
+const std::vector<float>& LightVolume::light_rgb() const { return m_impl->rgb_out; }
 
 const std::vector<float>& LightVolume::light_rho(std::size_t k) const {
   require(k < m_impl->lights.size(), "LightVolume::light_rho: light " + std::to_string(k) + " does not exist");
-  return m_impl->lights[k].rho1;
+  return m_impl->lights[k].rho1_out;
 }
 
 const std::vector<float>& LightVolume::level0_rho(std::size_t k) const {
