@@ -1,4 +1,4 @@
-// render/src/lighting/light_scattering.cpp -- Gauss-Seidel diffusion of the light colour field
+// render/src/lighting/light_scattering.cpp -- Chebyshev-accelerated Jacobi diffusion of the light colour field
 #include "light_scattering.h"
 
 #include <algorithm>

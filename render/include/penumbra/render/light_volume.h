@@ -24,15 +24,17 @@
 //
 // Level 1: the mesh vertices. Initial values are level 0 interpolated trilinearly; then
 // semi-Lagrangian steps (eq. 6-8) trace back from each vertex by the step h = c dt through the
-// tets (walking the face adjacency; faces parallel to the light and walks through vertices and
-// edges are handled), take rho at the departure point from the corners of its tet, and attenuate
-// by exp(-sigma_a_tilde * integral of tau), the integral exact for the linear scalar and the
-// piecewise-linear transfer function. The departure value interpolates the optical depth rescaled
+// tets (the renderer's walk: exits by edge signs in the plane across the ray with one consistent
+// tie rule, so rays through vertices, along edges and in face planes walk like nearby generic
+// rays; a ray from a boundary vertex along the boundary is pushed inside), take rho at the
+// departure point from the corners of its tet, and attenuate by exp(-sigma_a_tilde * integral
+// of tau), the integral exact for the linear scalar and the piecewise-linear transfer function. The departure value interpolates the optical depth rescaled
 // by the ray's path length, which is exact for Beer-Lambert in a homogeneous medium at any step
 // (linear interpolation of rho, the paper's barycentric choice, errs at every step); across shadow
 // edges it falls back to linear interpolation of rho. Vertices are processed in order along the
-// light (Gauss-Seidel, in parallel within slabs of half a step), so one pass carries the light
-// across the mesh; later passes recompute only vertices whose inputs changed, until the largest
+// light (Gauss-Seidel, in parallel within slabs of half a step; internally the points are
+// renumbered along a Morton curve, for the cache), so one pass carries the light across the
+// mesh; later passes recompute only vertices whose inputs changed, until the largest
 // change is below the tolerance. A trace that leaves the mesh (the inflow boundary, a hole, a
 // concavity) takes the level-0 value at the exit point, looked up in the empty level-0 nodes
 // around it where there are any. The paper's step count (level-0 cell size / mean edge length) is
