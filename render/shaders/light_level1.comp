@@ -465,7 +465,8 @@ float update(int v) {
   if (tr.kind == kInside) {
     if (reaches_light || walk_on) upstream = 1.0;
   } else if (tr.kind == kLeftMesh) {
-    upstream = sample_level0(end, true);
+    // A hair beyond the exit, as the CPU (kExitNudge of the smallest level-0 spacing).
+    upstream = sample_level0(end + d * (1e-4 * min(u_spacing.x, min(u_spacing.y, u_spacing.z))), true);
   } else {
     atomicAdd(counters[1], 1u);
     upstream = sample_level0(end, false);

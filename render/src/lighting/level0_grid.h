@@ -39,6 +39,7 @@ public:
   const Vec3d& lo() const { return m_lo; }
   const Vec3d& spacing() const { return m_h; }
   double max_spacing() const { return std::max(m_h.x, std::max(m_h.y, m_h.z)); }
+  double min_spacing() const { return std::min(m_h.x, std::min(m_h.y, m_h.z)); }
   const std::vector<Level0Mask>& mask() const { return m_mask; }
   const std::vector<float>& tau() const { return m_tau; }
 

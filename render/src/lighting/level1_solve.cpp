@@ -15,6 +15,9 @@ namespace {
 // (a factor 4 in rho), rho interpolated linearly from the next (a factor 16).
 constexpr double kGeometricDepth = 1.3862943611198906;
 constexpr double kLinearDepth = 2.772588722239781;
+// Beyond a walk's exit from the mesh, where level 0 is read: a fraction of a level-0 cell far
+// above float rounding of the exit point (relative 1e-7) and far below the cell.
+constexpr double kExitNudge = 1e-4;
 // Vertices per batch of a pass: the granularity at which a time budget can stop it.
 constexpr std::size_t kBatch = 2048;
 
@@ -312,7 +315,11 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         if (p.reaches_light || std::isnan(upstream)) upstream = 1.0;
         break;
       case Trace::Kind::left_mesh:
-        upstream = ctx.grid.sample_prefer_outside(rho0, end);
+        // Looked up a hair beyond the exit, on the side the light comes from: where a mesh
+        // boundary lies on a plane of level-0 nodes (an axis-aligned hole), the exit point itself
+        // is on a cell face, and its rounding (a recorded walk keeps it in float, the GPU works
+        // in float) would pick the cell on either side; the level-0 values there differ.
+        upstream = ctx.grid.sample_prefer_outside(rho0, end + p.d * (kExitNudge * ctx.grid.min_spacing()));
         break;
       default:
         lost.fetch_add(1, std::memory_order_relaxed);
