@@ -87,7 +87,9 @@ struct LightVolume::Impl {
     void forget_direction() {
       order_valid = false;
       pass_state.start_tet.clear();
-      pass_state.walks.clear();
+      // The records are kept, only invalidated: their lists' storage serves the next walks, so
+      // a moved light's first pass does not free and allocate a list per vertex again.
+      for (auto& w : pass_state.walks) w.valid = false;
     }
   };
 
@@ -206,7 +208,10 @@ struct LightVolume::Impl {
     // a pass overran the frame that also built the order.
     const std::size_t np = mesh->points.size();
     l.pass_state.start_tet.assign(np, -1);
-    if (!gpu && record_walks()) l.pass_state.walks.assign(np, lighting::RecordedWalk{});
+    if (gpu || !record_walks())
+      l.pass_state.walks = {};
+    else if (l.pass_state.walks.size() != np)
+      l.pass_state.walks.assign(np, lighting::RecordedWalk{});
     l.order_valid = true;
     if (gpu) gpu->set_order(*l.gpu, l.order);
   }
