@@ -194,6 +194,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     state.full = state.departure_tet.size() != np;
     if (state.full) {
       state.departure_tet.assign(np, -1);
+      state.departure_corners.resize(np);
       state.stale.assign(np, 1);
     }
     state.next.resize(np);
@@ -292,9 +293,12 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     Vec3d end = x + p.d * tr.end;
     double upstream = 0.0;
     state.departure_tet[vv] = -1;
+    state.departure_corners[vv] = {-1, -1, -1, -1};
     state.stale[vv] = 0;
     if (tr.kind == Trace::Kind::inside && !p.reaches_light) {
       state.departure_tet[vv] = tr.tet;
+      std::copy(std::begin(topo.walk_tets[static_cast<std::size_t>(tr.tet)].v),
+                std::end(topo.walk_tets[static_cast<std::size_t>(tr.tet)].v), state.departure_corners[vv].begin());
       // A corner not in an earlier group was read before its update in this pass.
       for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(tr.tet)].v)
         if (order.group_of[static_cast<std::size_t>(c)] >= order.group_of[vv]) state.stale[vv] = 1;
@@ -307,6 +311,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         tr = walk_to_light(walk_input, p.v, x, p.d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
         end = x + p.d * tr.end;
         state.departure_tet[vv] = -1;
+        state.departure_corners[vv] = {-1, -1, -1, -1};
         state.stale[vv] = 0;
       }
     }
@@ -330,6 +335,12 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       if (segment_meets_box(x, end, box)) return 0.0f;
     return static_cast<float>(flush(upstream * std::exp(-ctx.sigma_a * tr.depth)));
   };
+  // After the first pass: a stale read, or a departure corner that changed in this pass.
+  auto needs_update = [&](std::size_t v) {
+    bool dirty = state.stale[v] != 0;
+    for (std::int32_t c : state.departure_corners[v]) dirty = dirty || (c >= 0 && state.changed[static_cast<std::size_t>(c)]);
+    return dirty;
+  };
   auto run = [&](std::size_t b, std::size_t e) {
     // In three phases, so that the fresh walks of the vertices run together (walk_batch keeps
     // several in flight and their memory loads overlap).
@@ -346,10 +357,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       const auto vv = static_cast<std::size_t>(v);
       // After the first pass a vertex whose inputs are unchanged keeps its value: only stale
       // reads and the vertices downstream of a change are recomputed.
-      bool recompute = full || state.stale[vv];
-      if (!recompute && state.departure_tet[vv] >= 0)
-        for (std::int32_t c : topo.walk_tets[static_cast<std::size_t>(state.departure_tet[vv])].v)
-          recompute = recompute || state.changed[static_cast<std::size_t>(c)];
+      const bool recompute = full || needs_update(vv);
       if (!recompute) {
         state.next[vv] = rho1[vv];
         continue;
@@ -405,7 +413,14 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         return false;
       }
       first_batch = false;
-      if (e - b < 256)
+      // After the first pass most batches hold a few vertices to update, if any: the threads are
+      // woken only for enough work (waking them per group cost a few ms per pass).
+      std::size_t work = e - b;
+      if (!full) {
+        work = 0;
+        for (std::size_t i = b; i < e && work < 256; ++i) work += needs_update(static_cast<std::size_t>(order.vertices[i]));
+      }
+      if (work < 256)
         run(b, e);
       else
         parallel_for(e - b, 64, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });

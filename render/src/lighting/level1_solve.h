@@ -96,6 +96,9 @@ struct PassState {
   std::vector<std::int32_t> start_tet;  ///< per vertex, see walk_to_light; kept across clear()
   std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet
   std::vector<std::int32_t> departure_tet;
+  /// Per vertex, the corners of its departure tet (4 ids, -1 without one): the passes after the
+  /// first check them for changes in pass order, without loading the tets.
+  std::vector<std::array<std::int32_t, 4>> departure_corners;
   std::vector<std::uint8_t> stale, changed;
   std::vector<float> next;
   std::vector<ParallelPoint> parallel;  ///< a directional light's projections, built per full pass

@@ -130,6 +130,7 @@ struct LightVolume::Impl {
   lighting::ScatterSolve solve;  // the CPU iteration in progress (a frame may end inside one)
   double last_chunk_ms = -1;     // one block of a CPU iteration
   double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
+  double last_publish_ms = 0;  // copying the results to the caller's order ends every call: kept out of the budget
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
   void build_grid() {
@@ -391,7 +392,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   auto allowed = [&](double expected_ms) {
     if (budget.max_work_units >= 0 && report.work_units >= budget.max_work_units) return false;
     if (expected_ms < 0) return !did_work || !std::isfinite(budget.max_ms);
-    return !did_work || ms_since(t0) + expected_ms < budget.max_ms;
+    return !did_work || ms_since(t0) + expected_ms + im.last_publish_ms < budget.max_ms;
   };
   using Stage = Impl::LightState::Stage;
   for (auto& l : im.lights) {
@@ -406,7 +407,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   const auto deadline =
       std::isfinite(budget.max_ms)
           ? t0 + std::chrono::duration_cast<Clock::duration>(
-                     std::chrono::duration<double, std::milli>(budget.max_ms - im.last_combine_ms))
+                     std::chrono::duration<double, std::milli>(budget.max_ms - im.last_combine_ms - im.last_publish_ms))
           : Clock::time_point::max();
   for (auto& l : im.lights)
     while (l.stage == Stage::level1) {
@@ -456,7 +457,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         if (!allowed(im.gpu ? im.last_sweep_ms : im.last_chunk_ms < 0 ? -1.0 : im.last_chunk_ms * chunks)) break;
       } else {
         if (!allowed(0.0)) break;  // the work-unit cap
-        const double room = budget.max_ms - ms_since(t0);
+        const double room = budget.max_ms - ms_since(t0) - im.last_publish_ms;
         const auto fit = static_cast<std::size_t>(std::max(0.0, room / im.last_chunk_ms));
         if (did_work && fit < 2) break;
         chunks = std::min(chunks, std::max<std::size_t>(fit, 2));
@@ -506,7 +507,11 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       report.residual = std::max(report.residual, l.residual);
     }
   if (!im.scatter_converged) report.residual = std::max(report.residual, im.scatter_residual);
-  if (did_work || combined) im.publish();
+  if (did_work || combined) {
+    const auto tp = Clock::now();
+    im.publish();
+    im.last_publish_ms = ms_since(tp);
+  }
   report.total_ms = ms_since(t0);
   return report;
 }
