@@ -71,7 +71,10 @@ struct LightVolume::Impl {
     std::vector<float> rho0;         // per level-0 node
     std::vector<float> rho0_vertex;  // level 0 at the mesh points (initial values; warm-start reference)
     std::vector<float> rho1;         // per mesh point (the solver's order, see point_order)
-    std::vector<float> rho1_out;     // rho1 in the caller's point order (light_rho)
+    // rho1 in the caller's point order, copied when light_rho asks for it (nothing renders from
+    // it, so the frame budget does not pay for it).
+    mutable std::vector<float> rho1_out;
+    mutable bool rho1_out_stale = true;
     lighting::VertexOrder order;
     lighting::PassState pass_state;
     bool order_valid = false;
@@ -143,19 +146,17 @@ struct LightVolume::Impl {
     mark_all();
     for (auto& l : lights) l.forget_direction();  // the step sets the vertex groups
   }
-  // The results in the caller's point order.
+  // The light colour in the caller's point order (light_rho's copies are made when asked for).
   void publish() {
     const std::size_t np = point_order.size();
     rgb_out.resize(3 * np);
-    for (auto& l : lights) l.rho1_out.resize(l.rho1.size());
     parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const auto p = static_cast<std::size_t>(point_order[i]);
         for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
-        for (auto& l : lights)
-          if (!l.rho1.empty()) l.rho1_out[p] = l.rho1[i];
       }
     });
+    for (auto& l : lights) l.rho1_out_stale = true;
   }
   void mark_all() {
     for (auto& l : lights) l.stage = LightState::Stage::level0;
@@ -520,7 +521,14 @@ const std::vector<float>& LightVolume::light_rgb() const { return m_impl->rgb_ou
 
 const std::vector<float>& LightVolume::light_rho(std::size_t k) const {
   require(k < m_impl->lights.size(), "LightVolume::light_rho: light " + std::to_string(k) + " does not exist");
-  return m_impl->lights[k].rho1_out;
+  const Impl& im = *m_impl;
+  const auto& l = im.lights[k];
+  if (l.rho1_out_stale) {
+    l.rho1_out.resize(l.rho1.size());
+    for (std::size_t i = 0; i < l.rho1.size(); ++i) l.rho1_out[static_cast<std::size_t>(im.point_order[i])] = l.rho1[i];
+    l.rho1_out_stale = false;
+  }
+  return l.rho1_out;
 }
 
 const std::vector<float>& LightVolume::level0_rho(std::size_t k) const {

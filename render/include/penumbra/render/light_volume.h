@@ -221,7 +221,8 @@ public:
 
   /// L(x) per mesh point, 3 floats per point (eq. 9, then eq. 12): what the renderer interpolates.
   const std::vector<float>& light_rgb() const;
-  /// rho of light k per mesh point (level 1, before scattering).
+  /// rho of light k per mesh point (level 1, before scattering). Copied out of the solver's own
+  /// point order on the first call after an update, so not to be called from two threads at once.
   const std::vector<float>& light_rho(std::size_t k) const;
   /// rho of light k per level-0 node.
   const std::vector<float>& level0_rho(std::size_t k) const;
