@@ -83,11 +83,13 @@ void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, con
                         const TransferFunction& tf) {
   table = ExtinctionTable(tf);
   this->scalars = scalars;
-  const std::size_t nt = mesh.tets.size();
+  // In walk-record order: the records are written in sequence, and the points of neighbouring
+  // records are near each other in a mesh whose points are in a Morton order too.
+  const std::size_t nt = topology.walk_tets.size();
   linear.resize(nt);
   parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
-      const auto& tv = mesh.tets[t];
+    for (std::size_t slot = b; slot < e; ++slot) {
+      const auto& tv = topology.walk_tets[slot].v;
       Vec3d q[4];
       double v[4];
       bool nan = false;
@@ -97,8 +99,7 @@ void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, con
         nan = nan || std::isnan(v[c]);
       }
       const Vec3d g = linear_gradient(q, v);
-      linear[static_cast<std::size_t>(topology.field_slot[t])] =
-          nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{v[0] - dot(g, q[0]), g};
+      linear[slot] = nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{v[0] - dot(g, q[0]), g};
     }
   });
 }
