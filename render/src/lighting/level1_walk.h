@@ -59,8 +59,11 @@ struct WalkInput {
 /// and in face planes it therefore walks as a nearby generic ray would, never losing or doubling
 /// a tet. The start is the tet of v's star whose face opposite v the ray leaves through (the
 /// perturbed ray misses v, so exactly one such face lies ahead of an interior vertex; none: the
-/// ray leaves the mesh at v). Depths and scalars at each crossing are interpolated over the
-/// crossed face, so the optical depth of each segment is integrated exactly.
+/// ray leaves the mesh at v). A walk from a boundary vertex that cannot start only by the tie
+/// rule or by rounding noise (a ray along the boundary) is retried with the noise snapped to 0
+/// and the rule's displacement turned, so that it runs inside the closed mesh. Depths and scalars
+/// at each crossing are interpolated over the crossed face, so the optical depth of each segment
+/// is integrated exactly.
 /// `start`, when given, caches the start for this vertex and direction (-1: unknown, -2: the ray
 /// leaves the mesh at v, else record << 2 | local index). `record`, when given, receives the
 /// walked segments.
