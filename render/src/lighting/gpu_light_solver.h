@@ -51,7 +51,7 @@ public:
 
   /// A new grid (after construction or a change of resolution): uploads its mask and geometry.
   void set_grid(const Level0Grid& grid);
-  /// A new field: the grid's extinction, each tet's linear scalar and the extinction table.
+  /// A new field: the grid's extinction, the scalars per point and the extinction table.
   void set_field(const Level0Grid& grid, const Level1Field& field);
 
   std::shared_ptr<GpuLightBuffers> new_light();

@@ -65,43 +65,23 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
   mean_edge = edges ? sum / static_cast<double>(edges) : 0.0;
   min_edge = edges ? smallest : 0.0;
   const std::vector<std::int32_t> order = detail::morton_order(mesh);
-  field_slot.resize(nt);
-  for (std::size_t i = 0; i < order.size(); ++i) field_slot[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
+  std::vector<std::int32_t> record_of(nt);  // tet id -> its walk record
+  for (std::size_t i = 0; i < order.size(); ++i) record_of[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
   walk_tets = detail::walk_tets(mesh, order);
   star.resize(tet_ids.size());
   parallel_for(star.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
     for (std::size_t s = b; s < e; ++s) {
       const auto t = static_cast<std::size_t>(tet_ids[s]);
       const int k = tet_local[s];
-      star[s].record = field_slot[t] << 2 | k;
+      star[s].record = record_of[t] << 2 | k;
       for (int j = 0; j < 3; ++j) star[s].v[j] = mesh.tets[t][detail::kFaceVertices[k][j]];
     }
   });
 }
 
-void Level1Field::build(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scalars,
-                        const TransferFunction& tf) {
+void Level1Field::build(const std::vector<float>& point_scalars, const TransferFunction& tf) {
   table = ExtinctionTable(tf);
-  this->scalars = scalars;
-  // In walk-record order: the records are written in sequence, and the points of neighbouring
-  // records are near each other in a mesh whose points are in a Morton order too.
-  const std::size_t nt = topology.walk_tets.size();
-  linear.resize(nt);
-  parallel_for(nt, 4096, [&](std::size_t b, std::size_t e) {
-    for (std::size_t slot = b; slot < e; ++slot) {
-      const auto& tv = topology.walk_tets[slot].v;
-      Vec3d q[4];
-      double v[4];
-      bool nan = false;
-      for (int c = 0; c < 4; ++c) {
-        q[c] = mesh.points[static_cast<std::size_t>(tv[c])];
-        v[c] = scalars[static_cast<std::size_t>(tv[c])];
-        nan = nan || std::isnan(v[c]);
-      }
-      const Vec3d g = linear_gradient(q, v);
-      linear[slot] = nan ? LinearScalar{std::nan(""), {0, 0, 0}} : LinearScalar{v[0] - dot(g, q[0]), g};
-    }
-  });
+  scalars = point_scalars;
 }
 
 }  // namespace penumbra::render::lighting

@@ -21,18 +21,6 @@ constexpr double kExitNudge = 1e-4;
 // Vertices per batch of a pass: the granularity at which a time budget can stop it.
 constexpr std::size_t kBatch = 2048;
 
-// Optical depth over [ta, tb] of the ray x + t d in the tet whose field slot is `slot`.
-double segment_depth(const Level1Context& ctx, std::int32_t slot, const Vec3d& x, const Vec3d& d, double ta,
-                     double tb, int& piece_hint) {
-  if (!(tb > ta)) return 0.0;
-  const LinearScalar& f = ctx.field.linear[static_cast<std::size_t>(slot)];
-  if (std::isnan(f.offset)) return 0.0;
-  // The scalar along the segment: s(x + t d) = s(x) + t (grad . d) within the tet.
-  const double s_x = f.at(x);
-  const double slope = dot(f.grad, d);
-  return ctx.field.table.integral(s_x + slope * ta, s_x + slope * tb, tb - ta, &piece_hint);
-}
-
 }  // namespace
 
 double box_path_length(const Bounds& box, const Vec3d& x, const Light& light) {
@@ -267,23 +255,40 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   };
   // The same walk as last time: only the extinction along it is new.
   auto replay = [&](Pending& p, const RecordedWalk& walk) {
-    const Vec3d& x = mesh.points[static_cast<std::size_t>(p.v)];
+    const std::vector<float>& scalars = ctx.field.scalars;
+    auto scalar_at = [&](const WalkCrossing& c) {
+      double v = 0;
+      for (int j = 0; j < 3; ++j) v += static_cast<double>(c.mu[j]) * scalars[static_cast<std::size_t>(c.id[j])];
+      return v;
+    };
     int piece_hint = -1;
-    for (const WalkSegment& seg : walk.segments)
-      p.tr.depth += segment_depth(ctx, seg.slot, x, p.d, seg.ta, seg.tb, piece_hint);
+    double s_in = 0, t_in = 0;
+    for (std::size_t i = 0; i < walk.crossings.size(); ++i) {
+      const double s_out = scalar_at(walk.crossings[i]), t_out = walk.crossings[i].t;
+      if (i > 0) p.tr.depth += ctx.field.table.integral(s_in, s_out, t_out - t_in, &piece_hint);
+      s_in = s_out;
+      t_in = t_out;
+    }
     p.tr.kind = static_cast<Trace::Kind>(walk.kind);
     p.tr.tet = walk.tet;
     p.tr.end = p.tr.kind == Trace::Kind::inside ? p.len : static_cast<double>(walk.end);
+    if (p.tr.kind == Trace::Kind::inside) {
+      // The last stretch ends inside the departure tet, at the point its weights give.
+      const auto& corners = topo.walk_tets[static_cast<std::size_t>(walk.tet)].v;
+      double s_end = 0;
+      for (int k = 0; k < 4; ++k) s_end += static_cast<double>(walk.weights[k]) * scalars[static_cast<std::size_t>(corners[k])];
+      p.tr.depth += ctx.field.table.integral(s_in, s_end, p.len - t_in, &piece_hint);
+    }
   };
-  auto keep_walk = [&](const Trace& tr, const std::vector<WalkSegment>& walked, RecordedWalk& walk) {
-    walk.segments.assign(walked.begin(), walked.end());
+  auto keep_walk = [&](const Trace& tr, const std::vector<WalkCrossing>& walked, RecordedWalk& walk) {
+    walk.crossings.assign(walked.begin(), walked.end());
     walk.tet = tr.tet;
     walk.kind = static_cast<std::uint8_t>(tr.kind);
     walk.end = static_cast<float>(tr.end);
     for (int k = 0; k < 4; ++k) walk.weights[k] = tr.weights[k];
     walk.has_path = false;
     walk.valid = tr.kind != Trace::Kind::lost;
-    if (!walk.valid) walk.segments = {};
+    if (!walk.valid) walk.crossings = {};
   };
   // The new value of a vertex from its trace.
   auto end_update = [&](Pending& p, RecordedWalk& walk) -> float {
@@ -347,7 +352,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     thread_local std::vector<Pending> pending;
     thread_local std::vector<WalkJob> jobs;
     thread_local std::vector<std::size_t> job_of;  // the pending entry of each job
-    thread_local std::vector<std::vector<WalkSegment>> walked;
+    thread_local std::vector<std::vector<WalkCrossing>> walked;
     thread_local std::vector<RecordedWalk> unrecorded;  // walks not kept: these live for one call
     pending.clear();
     jobs.clear();

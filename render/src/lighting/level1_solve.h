@@ -75,12 +75,12 @@ struct VertexOrder {
   std::vector<double> path_length;
 };
 
-/// A vertex's walk towards the light, kept while the light and the step stay. The tets crossed,
-/// the crossing parameters and the departure point's weights and path length depend on the
-/// geometry only, so a new field (the next in-situ time step) re-integrates the extinction along
-/// the recorded segments instead of walking again.
+/// A vertex's walk towards the light, kept while the light and the step stay. The faces crossed
+/// (with the crossing points' weights and ray parameters) and the departure point's tet, weights
+/// and path length depend on the geometry only, so a new field (the next in-situ time step)
+/// re-integrates the extinction between the recorded crossings instead of walking again.
 struct RecordedWalk {
-  std::vector<WalkSegment> segments;
+  std::vector<WalkCrossing> crossings;
   std::int32_t tet = -1;  ///< Trace::tet
   float end = 0;          ///< Trace::end
   float weights[4] = {0, 0, 0, 0};  ///< Trace::weights

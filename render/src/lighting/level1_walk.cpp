@@ -76,22 +76,21 @@ struct Crossing {
   double t, s;
 };
 
-// The crossing of the face with points a, b, c (projected qa, qb, qc) from unnormalised weights
-// w (>= 0); with all weights 0 (the ray in the face's plane) it stays at `t_in`, `s_in`.
+// The crossing of the face with points id (projected q) from unnormalised weights w (>= 0);
+// with all weights 0 (the ray in the face's plane) the ray is still where it was, at `from`.
 template <class Rays>
-Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected q[3], const double w[3], double t_in,
-                    double s_in) {
-  Crossing c{{id[0], id[1], id[2]}, {0, 0, 0}, t_in, s_in};
+Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected q[3], const double w[3],
+                    const Crossing& from) {
   const double sum = w[0] + w[1] + w[2];
-  if (!(sum > 0)) return c;
+  if (!(sum > 0)) return from;
+  Crossing c{{id[0], id[1], id[2]}, {0, 0, 0}, 0.0, 0.0};
   const double inv = 1.0 / sum;
-  c.t = c.s = 0.0;
   for (int j = 0; j < 3; ++j) {
     c.mu[j] = w[j] * inv;
     c.t += c.mu[j] * q[j].depth;
     c.s += c.mu[j] * rays.scalar(id[j]);
   }
-  c.t = std::max(c.t, t_in);
+  c.t = std::max(c.t, from.t);
   return c;
 }
 
@@ -102,7 +101,7 @@ Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected 
 template <class Rays>
 class Walker {
 public:
-  Walker(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::vector<WalkSegment>* record,
+  Walker(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::vector<WalkCrossing>* record,
          bool snap = false)
       : m_in(in), m_rays(rays), m_v(v), m_length(length), m_record(record), m_snap(snap) {}
 
@@ -136,6 +135,7 @@ public:
     }
     m_grazed = false;
     m_enter = {{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)};
+    keep(m_enter);
     m_next = m_in.tets[static_cast<std::size_t>(m_slot)].next[m_k];
     if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
     return true;
@@ -148,7 +148,7 @@ public:
       return false;
     }
     m_tr.depth += m_in.table.integral(m_enter.s, m_out.s, m_out.t - m_enter.t, &m_piece_hint);
-    if (m_record) m_record->push_back({m_slot, static_cast<float>(m_enter.t), static_cast<float>(m_out.t)});
+    keep(m_out);
     if (m_next < 0) {
       m_tr.kind = Trace::Kind::left_mesh;
       m_tr.tet = m_slot;
@@ -184,7 +184,7 @@ public:
                           std::max(0.0, e_d[x])};
     const std::int32_t face[3] = {id[0], id[x], id[y]};
     const Projected face_q[3] = {q[0], q[x], q[y]};
-    m_out = cross_face(m_rays, face, face_q, w3, m_enter.t, m_enter.s);
+    m_out = cross_face(m_rays, face, face_q, w3, m_enter);
     return true;
   }
 
@@ -222,8 +222,15 @@ private:
       return false;
     }
     const double w3[3] = {std::max(0.0, e[0]), std::max(0.0, e[1]), std::max(0.0, e[2])};
-    m_out = cross_face(m_rays, face, q, w3, 0.0, m_rays.scalar(m_v));
+    m_out = cross_face(m_rays, face, q, w3, Crossing{{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)});
     return true;
+  }
+
+  void keep(const Crossing& c) {
+    if (m_record)
+      m_record->push_back({{c.id[0], c.id[1], c.id[2]},
+                           {static_cast<float>(c.mu[0]), static_cast<float>(c.mu[1]), static_cast<float>(c.mu[2])},
+                           static_cast<float>(c.t)});
   }
 
   // The departure point lies in the current tet: between the two crossings, its weights
@@ -243,7 +250,6 @@ private:
     for (int j = 0; j < 4; ++j) m_tr.weights[j] = static_cast<float>(sum > 0 ? weight[j] / sum : 0.25);
     const double s_end = m_enter.s + f * (m_out.s - m_enter.s);
     m_tr.depth += m_in.table.integral(m_enter.s, s_end, m_length - m_enter.t, &m_piece_hint);
-    if (m_record) m_record->push_back({m_slot, static_cast<float>(m_enter.t), static_cast<float>(m_length)});
     m_tr.kind = Trace::Kind::inside;
     m_tr.tet = m_slot;
     m_tr.end = m_length;
@@ -253,7 +259,7 @@ private:
   Rays m_rays;
   std::int32_t m_v;
   double m_length;
-  std::vector<WalkSegment>* m_record;
+  std::vector<WalkCrossing>* m_record;
   bool m_snap;
   Trace m_tr;
   bool m_grazed = false;
@@ -264,7 +270,7 @@ private:
 
 template <class Rays>
 Trace walk(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
-           std::vector<WalkSegment>* record, bool& grazed, bool snap = false) {
+           std::vector<WalkCrossing>* record, bool& grazed, bool snap = false) {
   Walker<Rays> walker(in, rays, v, length, record, snap);
   if (walker.start(start))
     while (walker.step()) {
@@ -283,7 +289,7 @@ Trace walk(const WalkInput& in, const Rays& rays, std::int32_t v, double length,
 // starts.
 template <class Rays>
 Trace walk_any_side(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
-                    std::vector<WalkSegment>* record) {
+                    std::vector<WalkCrossing>* record) {
   bool grazed = false;
   const Trace first = walk(in, rays, v, length, start, record, grazed);
   if (!grazed) return first;
@@ -365,7 +371,7 @@ void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vect
 }
 
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
-                    std::int32_t* start, std::vector<WalkSegment>* record) {
+                    std::int32_t* start, std::vector<WalkCrossing>* record) {
   if (in.parallel) return walk_any_side(in, ParallelRays{in.parallel, in.parallel[v]}, v, length, start, record);
   return walk_any_side(in, ConvergingRays{detail::RayFrame(x, d), in.points, in.scalars}, v, length, start, record);
 }

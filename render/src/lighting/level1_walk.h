@@ -23,10 +23,14 @@ struct ParallelPoint {
 void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vector<float>& scalars,
                       std::vector<ParallelPoint>& out);
 
-/// One tet of a recorded walk and the walk's parameter range inside it.
-struct WalkSegment {
-  std::int32_t slot;  ///< the tet's walk record (Level1Topology::walk_tets, also its field slot)
-  float ta, tb;
+/// A point where a recorded walk crosses a face (or starts, at its vertex: ids all v): the
+/// face's points and their weights there, and its ray parameter. The scalar there is the
+/// weighted mean of the points' scalars whatever the field, so a new field's optical depth along
+/// a recorded walk needs no per-tet records.
+struct WalkCrossing {
+  std::int32_t id[3];
+  float mu[3];
+  float t;
 };
 
 /// Result of walking the straight segment from a vertex towards the light.
@@ -66,9 +70,9 @@ struct WalkInput {
 /// is integrated exactly.
 /// `start`, when given, caches the start for this vertex and direction (-1: unknown, -2: the ray
 /// leaves the mesh at v, else record << 2 | local index). `record`, when given, receives the
-/// walked segments.
+/// walk's start and every face it crosses (the end inside a tet is given by `weights`).
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
-                    std::int32_t* start = nullptr, std::vector<WalkSegment>* record = nullptr);
+                    std::int32_t* start = nullptr, std::vector<WalkCrossing>* record = nullptr);
 
 /// One walk of a batch: walk_to_light's arguments and, after walk_batch, its result.
 struct WalkJob {
@@ -76,7 +80,7 @@ struct WalkJob {
   Vec3d x, d;
   double length;
   std::int32_t* start;
-  std::vector<WalkSegment>* record;
+  std::vector<WalkCrossing>* record;
   Trace trace;
 };
 

@@ -21,8 +21,8 @@ namespace penumbra::render {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-// A recorded level-1 walk (PassState::walks) per point: the 64-byte record and about 9 segments of 12 B.
-constexpr double kWalkBytesPerPoint = 180.0;
+// A recorded level-1 walk (PassState::walks) per point: the 64-byte record and about 9 crossings of 28 B.
+constexpr double kWalkBytesPerPoint = 320.0;
 // Vertices in a level-1 batch (level1_solve.cpp's kBatch), for the budget's estimate of one.
 constexpr double kLevel1BatchEstimate = 2048.0;
 // The smallest scattering tolerance (relative to max |L|) that float iterates can meet: 16 ulp.
@@ -117,8 +117,7 @@ struct LightVolume::Impl {
   std::vector<float> scalars;
   std::unique_ptr<lighting::GpuLightSolver> gpu;  // null: the CPU solves
   bool gpu_scatter_stale = true;                  // the device's scattering source is out of date
-  bool has_field = false, field_pending = false, resample_pending = false;
-  TransferFunction tf;  // of the field; its per-tet records are built in update(), in its budget
+  bool has_field = false, resample_pending = false;
   std::vector<LightState> lights;
   std::vector<float> pre, rgb, previous_pre;
   double pre_scale = 0;
@@ -130,7 +129,7 @@ struct LightVolume::Impl {
   std::vector<float> scratch0;
   double step = 0;
   // The last durations, for the time budget's look-ahead (-1: not timed yet).
-  double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1, last_resample_ms = -1, last_field_ms = -1;
+  double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
   lighting::ScatterSolve solve;  // the CPU iteration in progress (a frame may end inside one)
   double last_chunk_ms = -1;     // one block of a CPU iteration
   double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
@@ -306,9 +305,6 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.mesh = std::make_shared<const TetMesh>(detail::with_points_in_order(*mesh, im.point_order));
   im.opt = std::move(options);
   im.topology = lighting::Level1Topology(*im.mesh);
-  // The per-tet field records are rebuilt in update() for every field; allocated here, their
-  // first touch (32 MB at 1M tets) is not charged to a frame's budget.
-  im.field.linear.resize(im.topology.walk_tets.size());
   im.scatter_weights = lighting::scatter_weights(*im.mesh, im.topology);
   im.scatter_plan = lighting::plan_scatter(*im.mesh, im.topology, im.scatter_weights);
   if (im.opt.device)
@@ -331,9 +327,8 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
   tf.validate();
   im.scalars.resize(point_scalars.size());
   for (std::size_t i = 0; i < im.scalars.size(); ++i) im.scalars[i] = point_scalars[static_cast<std::size_t>(im.point_order[i])];
-  im.tf = tf;
+  im.field.build(im.scalars, tf);
   im.has_field = true;
-  im.field_pending = true;
   im.resample_pending = true;
   im.mark_all();
 }
@@ -384,6 +379,14 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   const auto t0 = Clock::now();
   LightUpdateReport report;
   bool did_work = false;
+  if (im.resample_pending) {
+    const auto tr = Clock::now();
+    im.grid.resample(*im.mesh, im.scalars, im.field.table);
+    if (im.gpu) im.gpu->set_field(im.grid, im.field);
+    im.resample_pending = false;
+    report.resample_ms = ms_since(tr);
+    did_work = true;
+  }
   // A piece of work starts only if it is expected (from its last duration) to end within the
   // time budget; the first piece of a call always starts, so every call makes progress.
   // A piece never timed yet (expected_ms < 0) starts only as the first of a call.
@@ -392,28 +395,9 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     if (expected_ms < 0) return !did_work || !std::isfinite(budget.max_ms);
     return !did_work || ms_since(t0) + expected_ms + im.last_publish_ms < budget.max_ms;
   };
-  // A new field: its per-tet records for level 1, then its level-0 extinction, two pieces.
-  if (im.field_pending) {
-    const auto tf0 = Clock::now();
-    im.field.build(*im.mesh, im.topology, im.scalars, im.tf);
-    im.field_pending = false;
-    im.last_field_ms = ms_since(tf0);
-    report.resample_ms += im.last_field_ms;
-    did_work = true;
-  }
-  if (im.resample_pending && allowed(im.last_resample_ms)) {
-    const auto tr = Clock::now();
-    im.grid.resample(*im.mesh, im.scalars, im.field.table);
-    if (im.gpu) im.gpu->set_field(im.grid, im.field);
-    im.resample_pending = false;
-    im.last_resample_ms = ms_since(tr);
-    report.resample_ms += im.last_resample_ms;
-    did_work = true;
-  }
-  const bool field_ready = !im.field_pending && !im.resample_pending;
   using Stage = Impl::LightState::Stage;
   for (auto& l : im.lights) {
-    if (!field_ready || l.stage != Stage::level0) continue;
+    if (l.stage != Stage::level0) continue;
     if (!allowed(im.last_level0_ms)) break;
     const auto tl = Clock::now();
     im.solve_level0(l, report);

@@ -16,7 +16,7 @@ using render::lighting::ParallelPoint;
 using render::lighting::Trace;
 using render::lighting::WalkInput;
 using render::lighting::WalkJob;
-using render::lighting::WalkSegment;
+using render::lighting::WalkCrossing;
 
 // A mesh with its walk inputs for one field and transfer function.
 struct WalkScene {
@@ -27,7 +27,7 @@ struct WalkScene {
 
   WalkScene(std::shared_ptr<const TetMesh> m, const std::vector<float>& s, const TransferFunction& tf)
       : mesh(std::move(m)), topology(*mesh) {
-    field.build(*mesh, topology, s, tf);
+    field.build(s, tf);
   }
   // Inputs for a directional light towards `towards` (unit), or for a point light (null).
   WalkInput input(const Vec3d* towards) {
@@ -57,7 +57,7 @@ TEST(Level1Walk, BatchEqualsSingleWalks) {
     const WalkInput in = sc.input(towards);
     const std::size_t np = sc.mesh->points.size();
     std::vector<WalkJob> jobs;
-    std::vector<std::vector<WalkSegment>> batch_segments(np), single_segments(np);
+    std::vector<std::vector<WalkCrossing>> batch_segments(np), single_segments(np);
     std::vector<std::int32_t> batch_start(np, -1), single_start(np, -1);
     std::vector<Trace> single(np);
     for (std::size_t p = 0; p < np; ++p) {
@@ -75,9 +75,7 @@ TEST(Level1Walk, BatchEqualsSingleWalks) {
       ASSERT_EQ(batch_start[p], single_start[p]) << "variant " << variant << " point " << p;
       ASSERT_EQ(batch_segments[p].size(), single_segments[p].size()) << "variant " << variant << " point " << p;
       for (std::size_t k = 0; k < single_segments[p].size(); ++k) {
-        EXPECT_EQ(batch_segments[p][k].slot, single_segments[p][k].slot);
-        EXPECT_EQ(batch_segments[p][k].ta, single_segments[p][k].ta);
-        EXPECT_EQ(batch_segments[p][k].tb, single_segments[p][k].tb);
+        EXPECT_EQ(0, std::memcmp(&batch_segments[p][k], &single_segments[p][k], sizeof(WalkCrossing)));
       }
       inside += single[p].kind == Trace::Kind::inside;
     }

@@ -151,10 +151,11 @@ struct LightVolumeOptions {
   /// Safety caps on iterations per light and for scattering (each counts as one work unit).
   int level1_max_passes = 64;
   int scatter_max_iterations = 2000;
-  /// Level-1 walks are recorded (tets, crossing parameters, departure weights: about 180 bytes
-  /// per point and light on a tet mesh) so that a new field with the same lights re-integrates
-  /// along them instead of walking again. They are kept while points x lights x 180 B fits in
-  /// this budget, else every walk is traced anew (0 turns recording off).
+  /// Level-1 walks are recorded (the faces crossed with their crossing points' weights, the
+  /// departure weights: about 320 bytes per point and light on a tet mesh) so that a new field
+  /// with the same lights re-integrates along them instead of walking again. They are kept while
+  /// points x lights x 320 B fits in this budget, else every walk is traced anew (0 turns
+  /// recording off).
   std::size_t walk_memory_budget_bytes = std::size_t{1} << 30;
   LightSolveMode mode = LightSolveMode::two_level;
   /// Opaque boxes embedded in the volume (level-0 mask "occluder"; exact in level 1).
@@ -198,10 +199,10 @@ struct Level0View {
 };
 
 /// The two-level light volume of one tet mesh. Not thread-safe; update() uses the worker pool.
-/// Memory besides the level-0 grid, measured on a 750K-tet block: about 240 bytes per tet (its own
-/// copy of the mesh with the points renumbered, the walk records, each point's star, the field's
-/// per-tet records, the scattering stencil), and about 260 bytes per point for each light, its
-/// recorded walks included (see walk_memory_budget_bytes).
+/// Memory besides the level-0 grid, measured on a 750K-tet block: about 210 bytes per tet (its own
+/// copy of the mesh with the points renumbered, the walk records, each point's star, the
+/// scattering stencil), and about 380 bytes per point for each light, its recorded walks
+/// included (see walk_memory_budget_bytes).
 class LightVolume {
 public:
   LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions options = {});
