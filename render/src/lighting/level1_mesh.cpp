@@ -1,4 +1,4 @@
-// render/src/lighting/level1_mesh.cpp -- point-to-tet and point-to-point adjacency, tet gradients
+// render/src/lighting/level1_mesh.cpp -- point-to-tet and point-to-point adjacency, the walk records
 #include "level1_mesh.h"
 
 #include <algorithm>
@@ -16,8 +16,10 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
   for (const auto& tv : mesh.tets)
     for (int k = 0; k < 4; ++k) ++tet_offsets[static_cast<std::size_t>(tv[k]) + 1];
   for (std::size_t p = 0; p < np; ++p) tet_offsets[p + 1] += tet_offsets[p];
-  tet_ids.resize(static_cast<std::size_t>(tet_offsets[np]));
-  tet_local.resize(tet_ids.size());
+  // The tets around each point (and the point's local index in each), for the stencil and the
+  // star below.
+  std::vector<std::int32_t> tet_ids(static_cast<std::size_t>(tet_offsets[np]));
+  std::vector<std::int8_t> tet_local(tet_ids.size());
   std::vector<std::int64_t> fill(tet_offsets.begin(), tet_offsets.end() - 1);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) {

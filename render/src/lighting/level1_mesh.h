@@ -19,9 +19,7 @@ struct StarFace {
 /// Per-mesh connectivity, built once: the tets around each point and the edge neighbours of each
 /// point (the scattering stencil), with the mean edge length.
 struct Level1Topology {
-  std::vector<std::int64_t> tet_offsets;   ///< point p's tets: tet_ids[tet_offsets[p] .. tet_offsets[p+1])
-  std::vector<std::int32_t> tet_ids;
-  std::vector<std::int8_t> tet_local;      ///< p's local index in that tet
+  std::vector<std::int64_t> tet_offsets;   ///< point p's tets: star[tet_offsets[p] .. tet_offsets[p+1])
   std::vector<std::int64_t> edge_offsets;  ///< point p's edge neighbours, sorted, unique
   std::vector<std::int32_t> edge_ids;
   std::vector<float> longest_edge;         ///< per point, its longest incident edge
