@@ -18,8 +18,6 @@ constexpr double kLinearDepth = 2.772588722239781;
 // Beyond a walk's exit from the mesh, where level 0 is read: a fraction of a level-0 cell far
 // above float rounding of the exit point (relative 1e-7) and far below the cell.
 constexpr double kExitNudge = 1e-4;
-// Vertices per batch of a pass: the granularity at which a time budget can stop it.
-constexpr std::size_t kBatch = 2048;
 
 }  // namespace
 
@@ -173,15 +171,10 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   const bool point = light.kind == Light::Kind::point;
   const Vec3d back = point ? Vec3d{} : -normalize(light.vector);
   const std::size_t np = rho1.size();
-  if (state.start_tet.size() != np) state.start_tet.assign(np, -1);
-  if (!ctx.record_walks)
-    state.walks = {};
-  else if (state.walks.size() != np)
-    state.walks.assign(np, RecordedWalk{});
+  state.prepare_walks(np, ctx.record_walks);
   if (!state.in_pass) {
-    state.full = state.departure_tet.size() != np;
+    state.full = state.departure_corners.size() != np;
     if (state.full) {
-      state.departure_tet.assign(np, -1);
       state.departure_corners.resize(np);
       state.stale.assign(np, 1);
     }
@@ -297,11 +290,9 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     Trace& tr = p.tr;
     Vec3d end = x + p.d * tr.end;
     double upstream = 0.0;
-    state.departure_tet[vv] = -1;
     state.departure_corners[vv] = {-1, -1, -1, -1};
     state.stale[vv] = 0;
     if (tr.kind == Trace::Kind::inside && !p.reaches_light) {
-      state.departure_tet[vv] = tr.tet;
       std::copy(std::begin(topo.walk_tets[static_cast<std::size_t>(tr.tet)].v),
                 std::end(topo.walk_tets[static_cast<std::size_t>(tr.tet)].v), state.departure_corners[vv].begin());
       // A corner not in an earlier group was read before its update in this pass.
@@ -315,7 +306,6 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         walk.valid = false;
         tr = walk_to_light(walk_input, p.v, x, p.d, box_path_length(mesh.bounds, x, light) * (1 + 1e-9) + 1e-300);
         end = x + p.d * tr.end;
-        state.departure_tet[vv] = -1;
         state.departure_corners[vv] = {-1, -1, -1, -1};
         state.stale[vv] = 0;
       }
@@ -407,8 +397,8 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   bool first_batch = true;
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
-    for (std::size_t b = std::max(begin, state.next_vertex); b < end; b += kBatch) {
-      const std::size_t e = std::min(end, b + kBatch);
+    for (std::size_t b = std::max(begin, state.next_vertex); b < end; b += kLevel1Batch) {
+      const std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
       const auto expected = std::chrono::duration<double, std::milli>(std::max(0.0, state.vertex_ms) * static_cast<double>(e - b));
       if (!first_batch && now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(expected) >= deadline) {

@@ -89,15 +89,15 @@ struct RecordedWalk {
   bool valid = false, has_path = false;
 };
 
-/// What a pass remembers for the next: each vertex's departure tet (-1: its value came from
-/// level 0 or the light) and whether it read a corner not yet updated in its pass (stale). Reset
-/// it (clear()) whenever the light, field or step changes.
+/// What a pass remembers for the next: each vertex's departure corners and whether it read a
+/// corner not yet updated in its pass (stale). Reset it (clear()) whenever the light, field or
+/// step changes.
 struct PassState {
   std::vector<std::int32_t> start_tet;  ///< per vertex, see walk_to_light; kept across clear()
   std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet
-  std::vector<std::int32_t> departure_tet;
-  /// Per vertex, the corners of its departure tet (4 ids, -1 without one): the passes after the
-  /// first check them for changes in pass order, without loading the tets.
+  /// Per vertex, the corners of its departure tet (4 ids; -1: its value came from level 0 or the
+  /// light): the passes after the first check them for changes in pass order, without loading
+  /// the tets. Empty after clear(): the next pass is full.
   std::vector<std::array<std::int32_t, 4>> departure_corners;
   std::vector<std::uint8_t> stale, changed;
   std::vector<float> next;
@@ -110,11 +110,23 @@ struct PassState {
   /// expected to end by the deadline. Kept across clear().
   double vertex_ms = -1.0;
   void clear() {
-    departure_tet.clear();
+    departure_corners.clear();
     in_pass = false;
+  }
+  /// Sizes the per-vertex walk state for np vertices, the recorded walks only if `record`
+  /// (their storage kept when already sized).
+  void prepare_walks(std::size_t np, bool record) {
+    if (start_tet.size() != np) start_tet.assign(np, -1);
+    if (!record)
+      walks = {};
+    else if (walks.size() != np)
+      walks.assign(np, RecordedWalk{});
   }
 };
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step);
+
+/// Vertices per batch of a pass: the granularity at which a time budget can stop it.
+inline constexpr std::size_t kLevel1Batch = 2048;
 
 /// One Gauss-Seidel pass of eq. 8 over the vertices in `order` (groups in order, the vertices
 /// of a group in parallel, reading the values of earlier groups already updated):

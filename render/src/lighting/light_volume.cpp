@@ -23,8 +23,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 // A recorded level-1 walk (PassState::walks) per point: the 64-byte record and about 9 crossings of 28 B.
 constexpr double kWalkBytesPerPoint = 320.0;
-// Vertices in a level-1 batch (level1_solve.cpp's kBatch), for the budget's estimate of one.
-constexpr double kLevel1BatchEstimate = 2048.0;
 // The smallest scattering tolerance (relative to max |L|) that float iterates can meet: 16 ulp.
 constexpr double kScatterToleranceFloor = 16.0 / (1 << 24);
 double ms_since(Clock::time_point t0) {
@@ -198,22 +196,18 @@ struct LightVolume::Impl {
     ++report.lights_recomputed;
     report.l0_prop_ms += ms_since(t0);
   }
-  // The vertices sorted along the light: a sort of all points, kept while the light stays.
+  // Whether the level-1 walks are recorded: they fit in the walk memory budget.
   bool record_walks() const {
     return static_cast<double>(mesh->points.size()) * static_cast<double>(lights.size()) * kWalkBytesPerPoint <=
            static_cast<double>(opt.walk_memory_budget_bytes);
   }
+  // The vertices grouped along the light, kept while the light stays.
   void ensure_order(LightState& l) {
     if (l.order_valid) return;
     l.order = lighting::order_vertices(*mesh, topology, l.light, step);
     // The per-vertex walk state too: allocating it (12 MB at 1M tets) inside the first batch of
     // a pass overran the frame that also built the order.
-    const std::size_t np = mesh->points.size();
-    l.pass_state.start_tet.assign(np, -1);
-    if (gpu || !record_walks())
-      l.pass_state.walks = {};
-    else if (l.pass_state.walks.size() != np)
-      l.pass_state.walks.assign(np, lighting::RecordedWalk{});
+    l.pass_state.prepare_walks(mesh->points.size(), !gpu && record_walks());
     l.order_valid = true;
     if (gpu) gpu->set_order(*l.gpu, l.order);
   }
@@ -423,9 +417,8 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       }
       // A CPU pass stops at the deadline by itself; it starts only with room for one batch of
       // the size last timed (unknown: only as the first piece of a call).
-      if (!allowed(im.gpu ? im.last_gpu_pass_ms
-                          : l.pass_state.vertex_ms < 0 ? -1.0 : l.pass_state.vertex_ms * kLevel1BatchEstimate))
-        break;
+      const double batch_ms = l.pass_state.vertex_ms * static_cast<double>(lighting::kLevel1Batch);
+      if (!allowed(im.gpu ? im.last_gpu_pass_ms : l.pass_state.vertex_ms < 0 ? -1.0 : batch_ms)) break;
       const auto tp = Clock::now();
       if (im.level1_pass(l, report, deadline)) ++report.work_units;
       if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
