@@ -361,7 +361,7 @@ Trace walk(int v, float seg_length, bool use_cache) {
 }
 
 // The walk, retried with rounding noise snapped and the plane across the ray turned when it
-// could not start only by the tie rule or by that noise (walk_any_side).
+// could not start only by the tie rule or by that noise (walk_turned in level1_walk.cpp).
 Trace walk_to_light(int v, vec3 x, vec3 d, float seg_length, bool use_cache) {
   set_frame(x, d);
   g_quarter = 0;

@@ -22,7 +22,7 @@ using detail::WalkTet;
 // are rounding noise around an exact zero: a ray that really runs along an edge or a face (an
 // axis-aligned or diagonal light on a structured mesh) is projected through an irrational frame,
 // and its edge values come out as +-1e-17 instead of 0. A walk that could not start by such
-// noise is retried with them snapped to 0 (walk_any_side), where the tie rule decides.
+// noise is retried with them snapped to 0 (walk_turned), where the tie rule decides.
 constexpr double kSnap = 1e-12;
 
 // A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
@@ -52,7 +52,7 @@ struct ConvergingRays {
 
 // The rays turned by a quarter turn (0 to 3) in the plane across them. The tie rule displaces
 // every ray by (eps, eps^2) in its plane; turning the plane turns that displacement, so each
-// quarter pushes a ray lying in the mesh boundary to another side of it (see walk_any_side).
+// quarter pushes a ray lying in the mesh boundary to another side of it (see walk_turned).
 // (Turning by quarters is exact: it permutes and negates coordinates, and every edge value
 // keeps its products.)
 template <class Rays>
@@ -268,39 +268,27 @@ private:
   Crossing m_enter{}, m_out{};  // the segment in the current tet runs from m_enter to m_out
 };
 
+// A walk that could not start only by the tie rule or by rounding noise (a ray from a boundary
+// vertex along the boundary, common on axis-aligned meshes and lights) is retried with the noise
+// snapped to 0 and the tie rule's displacement turned by 0 to 3 quarters; the first that starts
+// is kept (true): one of them pushes a ray along a boundary face, or along a convex edge of 90
+// degrees or more, into the mesh, as the closed mesh holds it. (A ray that meets the boundary
+// later, say along a hole's wall, leaves where the rule says and continues in level 0, as the
+// light does across the hole.) Retried walks are not cached as starts.
 template <class Rays>
-Trace walk(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
-           std::vector<WalkCrossing>* record, bool& grazed, bool snap = false) {
-  Walker<Rays> walker(in, rays, v, length, record, snap);
-  if (walker.start(start))
-    while (walker.step()) {
-    }
-  grazed = walker.grazed();
-  return walker.trace();
-}
-
-// The walk as the tie rule has it; when that cannot start only by the rule or by rounding noise
-// (a ray from a boundary vertex along the boundary, common on axis-aligned meshes and lights), it
-// is retried with the noise snapped to 0 and the tie rule's displacement turned by 0 to 3
-// quarters, and the first that starts is kept: one of them pushes a ray along a boundary face,
-// or along a convex edge of 90 degrees or more, into the mesh, as the closed mesh holds it. (A
-// ray that meets the boundary later, say along a hole's wall, leaves where the rule says and
-// continues in level 0, as the light does across the hole.) Retried walks are not cached as
-// starts.
-template <class Rays>
-Trace walk_any_side(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::int32_t* start,
-                    std::vector<WalkCrossing>* record) {
-  bool grazed = false;
-  const Trace first = walk(in, rays, v, length, start, record, grazed);
-  if (!grazed) return first;
-  if (start) *start = -1;
+bool walk_turned(const WalkInput& in, const Rays& rays, std::int32_t v, double length,
+                 std::vector<WalkCrossing>* record, Trace& out) {
   for (int quarter = 0; quarter <= 3; ++quarter) {
     if (record) record->clear();
-    const Trace t = walk(in, TurnedRays<Rays>{rays, quarter}, v, length, nullptr, record, grazed, true);
-    if (t.tet >= 0) return t;
+    Walker<TurnedRays<Rays>> walker(in, TurnedRays<Rays>{rays, quarter}, v, length, record, true);
+    if (!walker.start(nullptr)) continue;
+    while (walker.step()) {
+    }
+    out = walker.trace();
+    return true;
   }
   if (record) record->clear();
-  return first;
+  return false;
 }
 
 // Walks in flight per thread in walk_batch.
@@ -311,16 +299,14 @@ void walk_interleaved(const WalkInput& in, WalkJob* jobs, std::size_t count, con
   std::optional<Walker<Rays>> walkers[kInFlight];
   std::size_t job_of[kInFlight] = {};
   std::size_t next_job = 0;
-  // A walk over (or one that could not start only by the tie rule: retried in full) gives its
-  // job's result.
+  // A walk over gives its job's result; one that could not start only by the tie rule is
+  // retried (walk_turned) and, if a retry starts, gives that one's.
   auto finish = [&](WalkJob& job, const Walker<Rays>& w) {
-    if (!w.grazed()) {
-      job.trace = w.trace();
-      return;
+    if (w.grazed()) {
+      if (job.start) *job.start = -1;
+      if (walk_turned(in, make_rays(job), job.v, job.length, job.record, job.trace)) return;
     }
-    if (job.start) *job.start = -1;
-    if (job.record) job.record->clear();
-    job.trace = walk_any_side(in, make_rays(job), job.v, job.length, job.start, job.record);
+    job.trace = w.trace();
   };
   // Starts the next job that does not end at its start in slot k; false when none is left.
   auto launch = [&](int k) {
@@ -372,8 +358,9 @@ void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vect
 
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
                     std::int32_t* start, std::vector<WalkCrossing>* record) {
-  if (in.parallel) return walk_any_side(in, ParallelRays{in.parallel, in.parallel[v]}, v, length, start, record);
-  return walk_any_side(in, ConvergingRays{detail::RayFrame(x, d), in.points, in.scalars}, v, length, start, record);
+  WalkJob job{v, x, d, length, start, record, {}};
+  walk_batch(in, &job, 1);
+  return job.trace;
 }
 
 }  // namespace penumbra::render::lighting
