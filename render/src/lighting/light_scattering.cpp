@@ -78,6 +78,14 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
   }
 }
 
+void chebyshev_weights(int k, const std::array<double, 3>& sigma_s, std::array<double, 3>& omega) {
+  for (std::size_t ch = 0; ch < 3; ++ch) {
+    const double rho = 6.0 * sigma_s[ch] / (1.0 + 6.0 * sigma_s[ch]);
+    double& w = omega[ch];
+    w = k == 0 ? 1.0 : k == 1 ? 1.0 / (1.0 - 0.5 * rho * rho) : 1.0 / (1.0 - 0.25 * rho * rho * w);
+  }
+}
+
 double scatter_iteration(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
                          std::vector<float>& current, ScatterSolve& solve) {
   scatter_iteration_part(plan, pre, sigma_s, current, solve, kScatterChunks);
@@ -101,11 +109,7 @@ bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& p
       });
       solve.other.resize(current.size());
     }
-    for (int ch = 0; ch < 3; ++ch) {
-      const double rho = 6.0 * sigma_s[ch] / (1.0 + 6.0 * sigma_s[ch]);
-      double& w = solve.omega[static_cast<std::size_t>(ch)];
-      w = solve.iterations == 0 ? 1.0 : solve.iterations == 1 ? 1.0 / (1.0 - 0.5 * rho * rho) : 1.0 / (1.0 - 0.25 * rho * rho * w);
-    }
+    chebyshev_weights(solve.iterations, sigma_s, solve.omega);
     solve.residual = 0.0;
   }
   const std::size_t first = solve.next_chunk;

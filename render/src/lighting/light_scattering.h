@@ -58,6 +58,11 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
 /// of their finite neighbours (0 without any), so NaN never spreads. Intermediate iterates may
 /// overshoot by about the remaining error; the converged one is the step's solution to the
 /// tolerance, which has no new extrema.
+/// Chebyshev's weights for iteration k + 1 (k finished since the restart) from those of
+/// iteration k, per channel: omega_1 = 1, omega_2 = 1 / (1 - rho^2 / 2),
+/// omega_{k+1} = 1 / (1 - rho^2 omega_k / 4), rho = 6 s / (1 + 6 s). CPU and GPU both use it.
+void chebyshev_weights(int k, const std::array<double, 3>& sigma_s, std::array<double, 3>& omega);
+
 struct ScatterSolve {
   std::vector<float> other;          ///< L_{k-1} while iteration k + 1 runs, overwritten by L_{k+1}
   std::vector<std::uint8_t> finite;  ///< per position: its source is finite

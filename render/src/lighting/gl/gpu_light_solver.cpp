@@ -11,6 +11,7 @@
 
 #include "../../gpu/gl_program.h"
 #include "../../gpu/gpu_device_impl.h"
+#include "../light_scattering.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/gpu_ray_caster.h"
 
@@ -485,13 +486,8 @@ int GpuLightSolver::scatter(int max_iterations, double tolerance, const std::arr
     Impl::bind(gl, 3, m.iterate[m.current]);
     Impl::bind(gl, 4, m.iterate[1 - m.current]);
     gl.ProgramUniform1i(prog, slot, i);
-    // Chebyshev's weights, as scatter_iteration_part computes them.
     const int k = m.scatter_iterations++;
-    for (int ch = 0; ch < 3; ++ch) {
-      const double rho = 6.0 * sigma_s[static_cast<std::size_t>(ch)] / (1.0 + 6.0 * sigma_s[static_cast<std::size_t>(ch)]);
-      double& w = m.omega[static_cast<std::size_t>(ch)];
-      w = k == 0 ? 1.0 : k == 1 ? 1.0 / (1.0 - 0.5 * rho * rho) : 1.0 / (1.0 - 0.25 * rho * rho * w);
-    }
+    chebyshev_weights(k, sigma_s, m.omega);
     gl.ProgramUniform3f(prog, omega, static_cast<GLfloat>(m.omega[0]), static_cast<GLfloat>(m.omega[1]),
                         static_cast<GLfloat>(m.omega[2]));
     gl.ProgramUniform1i(prog, first, k == 0 ? 1 : 0);
