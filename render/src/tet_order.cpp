@@ -51,27 +51,19 @@ std::vector<std::int32_t> morton_point_order(const TetMesh& m) {
 }
 
 TetMesh with_points_in_order(const TetMesh& mesh, const std::vector<std::int32_t>& order) {
-  TetMesh out;
+  TetMesh out = mesh;  // tets, neighbours, boundary, bounds and counters as they are
+  out.surface = nullptr;
   const std::size_t np = mesh.points.size();
   std::vector<std::int32_t> rank(np);
-  out.points.resize(np);
   for (std::size_t i = 0; i < np; ++i) {
     const auto p = static_cast<std::size_t>(order[i]);
     rank[p] = static_cast<std::int32_t>(i);
     out.points[i] = mesh.points[p];
   }
-  out.tets.resize(mesh.tets.size());
   parallel_for(out.tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t)
-      for (int k = 0; k < 4; ++k) out.tets[t][k] = rank[static_cast<std::size_t>(mesh.tets[t][k])];
+      for (auto& v : out.tets[t]) v = rank[static_cast<std::size_t>(v)];
   });
-  out.neighbors = mesh.neighbors;
-  out.source_cell = mesh.source_cell;
-  out.boundary = mesh.boundary;
-  out.bounds = mesh.bounds;
-  out.welded_points = mesh.welded_points;
-  out.reoriented_tets = mesh.reoriented_tets;
-  out.topology_version = mesh.topology_version;
   return out;
 }
 
