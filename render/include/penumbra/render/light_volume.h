@@ -199,9 +199,9 @@ struct Level0View {
 };
 
 /// The two-level light volume of one tet mesh. Not thread-safe; update() uses the worker pool.
-/// Memory besides the level-0 grid, measured on a 750K-tet block: about 210 bytes per tet (its own
+/// Memory besides the level-0 grid, measured on a 750K-tet block: about 200 bytes per tet (its own
 /// copy of the mesh with the points renumbered, the walk records, each point's star, the
-/// scattering stencil), and about 380 bytes per point for each light, its recorded walks
+/// scattering stencil), and about 310 bytes per point for each light, its recorded walks
 /// included (see walk_memory_budget_bytes).
 class LightVolume {
 public:
