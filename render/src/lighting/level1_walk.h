@@ -3,8 +3,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "../ray_frame.h"
-#include "../walk_mesh.h"
+#include "ray_frame.h"
+#include "walk_mesh.h"
 #include "extinction_table.h"
 #include "level1_mesh.h"
 #include "penumbra/render/tet_mesh.h"

@@ -204,7 +204,7 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
     pts[4 * p + 2] = static_cast<float>(r.z);
     pts[4 * p + 3] = p < topology.longest_edge.size() ? topology.longest_edge[p] : 0.0f;
   }
-  // Tets as the CPU walk's records (at their field slots, neighbours as record << 2 | face), and
+  // Tets as the CPU walk's records (in its Morton order, neighbours as record << 2 | face), and
   // each point's star as (record << 2 | local index, the opposite face's vertices outward).
   const auto& walk = topology.walk_tets;
   std::vector<std::int32_t> tv(4 * walk.size()), nb(4 * walk.size());
