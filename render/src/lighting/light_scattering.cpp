@@ -49,6 +49,7 @@ ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, co
   }
   plan.edge_ids.resize(topology.edge_ids.size());
   plan.weights.resize(weights.size());
+  plan.weight_sums.assign(np, 0.0f);
   parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const auto p = static_cast<std::size_t>(plan.order[k]);
@@ -56,6 +57,7 @@ ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, co
       for (auto s = topology.edge_offsets[p]; s < topology.edge_offsets[p + 1]; ++s, ++out) {
         plan.edge_ids[out] = position[static_cast<std::size_t>(topology.edge_ids[static_cast<std::size_t>(s)])];
         plan.weights[out] = weights[static_cast<std::size_t>(s)];
+        plan.weight_sums[k] += plan.weights[out];
       }
     }
   });
@@ -101,12 +103,38 @@ bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& p
   const std::size_t np = plan.order.size();
   if (solve.next_chunk == 0) {
     if (solve.iterations == 0) {
-      // Which points have a finite source, once per solve: the inner loop then reads one byte
-      // per neighbour (a table that stays in cache) instead of testing its source values.
+      // Which points have a finite source, once per solve. Points without one are left out of
+      // every sum by a masked copy of the weights, made only when there are any, so that the
+      // inner loop has no test.
       solve.finite.resize(np);
-      parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-        for (std::size_t p = b; p < e; ++p) solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
+      std::vector<std::uint8_t> any(kScatterChunks, 0);
+      parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
+        for (std::size_t c = c0; c < c1; ++c)
+          for (std::size_t p = plan.chunk_begin[c]; p < plan.chunk_begin[c + 1]; ++p) {
+            solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
+            any[c] |= !solve.finite[p];
+            // A weight of 0 does not remove a NaN (0 * NaN is NaN): a start value that is not
+            // finite is replaced by the source, or 0 where that is not finite either.
+            for (std::size_t ch = 0; ch < 3; ++ch)
+              if (!std::isfinite(current[S * p + ch])) current[S * p + ch] = solve.finite[p] ? pre[S * p + ch] : 0.0f;
+          }
       });
+      solve.masked = std::find(any.begin(), any.end(), 1) != any.end();
+      if (solve.masked) {
+        solve.masked_weights = plan.weights;
+        solve.masked_sums.assign(np, 0.0f);
+        parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+          for (std::size_t p = b; p < e; ++p)
+            for (auto s = plan.edge_offsets[p]; s < plan.edge_offsets[p + 1]; ++s) {
+              float& w = solve.masked_weights[static_cast<std::size_t>(s)];
+              if (!solve.finite[static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(s)])]) w = 0.0f;
+              solve.masked_sums[p] += w;
+            }
+        });
+      } else {
+        solve.masked_weights = {};
+        solve.masked_sums = {};
+      }
       solve.other.resize(current.size());
     }
     chebyshev_weights(solve.iterations, sigma_s, solve.omega);
@@ -115,52 +143,49 @@ bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& p
   const std::size_t first = solve.next_chunk;
   const std::size_t last = std::min(kScatterChunks, first + std::max<std::size_t>(chunks, 1));
   const std::vector<std::uint8_t>& finite = solve.finite;
+  const float* weights = solve.masked ? solve.masked_weights.data() : plan.weights.data();
+  const float* sums = solve.masked ? solve.masked_sums.data() : plan.weight_sums.data();
   const bool plain = solve.iterations == 0;  // L_1 = J(L_0): L_{-1} does not exist
   const Colour omega = {static_cast<float>(solve.omega[0]), static_cast<float>(solve.omega[1]),
                         static_cast<float>(solve.omega[2]), 0.0f};
+  const Colour s = {static_cast<float>(sigma_s[0]), static_cast<float>(sigma_s[1]), static_cast<float>(sigma_s[2]), 0.0f};
+  const Colour one = {1, 1, 1, 1};
   std::vector<double> residuals(last - first, 0.0);
   parallel_for(last - first, 1, [&](std::size_t c0, std::size_t c1) {
     for (std::size_t c = first + c0; c < first + c1; ++c) {
       const std::size_t begin = plan.chunk_begin[c], end = plan.chunk_begin[c + 1];
-      double residual = 0.0;
+      float residual = 0.0f;
       for (std::size_t p = begin; p < end; ++p) {
         Colour sum = {0, 0, 0, 0};
-        float wsum = 0;
-        for (auto s = plan.edge_offsets[p]; s < plan.edge_offsets[p + 1]; ++s) {
-          const auto q = static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(s)]);
-          // Points without a finite source value are left out (their own value is derived).
-          if (!finite[q]) continue;
-          const float w = plan.weights[static_cast<std::size_t>(s)];
+        for (auto e = plan.edge_offsets[p]; e < plan.edge_offsets[p + 1]; ++e) {
           Colour v;
-          std::memcpy(&v, current.data() + S * q, sizeof v);
-          sum += w * v;
-          wsum += w;
+          std::memcpy(&v, current.data() + S * static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(e)]), sizeof v);
+          sum += weights[static_cast<std::size_t>(e)] * v;
         }
-        const bool own = finite[p];
-        Colour jacobi;
-        for (int ch = 0; ch < 3; ++ch) {
-          const double sum_ch = sum[ch];
-          double v;
-          if (!own)
-            v = wsum > 0 ? sum_ch / wsum : 0.0;
-          else if (sigma_s[ch] == 0.0 || wsum == 0.0)
-            v = pre[S * p + ch];
-          else
-            v = (pre[S * p + ch] + sigma_s[ch] * sum_ch) / (1.0 + sigma_s[ch] * wsum);
-          jacobi[ch] = static_cast<float>(v);
+        const float wsum = sums[p];
+        Colour jacobi, next;
+        if (finite[p]) {
+          // (L0 + s sum w L) / (1 + s sum w); with s = 0 or no neighbours the source itself.
+          Colour source;
+          std::memcpy(&source, pre.data() + S * p, sizeof source);
+          jacobi = (source + s * sum) / (one + s * wsum);
+          next = jacobi;
+          if (!plain) {
+            Colour before;
+            std::memcpy(&before, solve.other.data() + S * p, sizeof before);
+            next = before + omega * (jacobi - before);
+          }
+        } else {
+          // No source of its own: the weighted mean of its finite neighbours (0 without any).
+          next = wsum > 0 ? sum / wsum : Colour{0, 0, 0, 0};
         }
-        jacobi[3] = 0.0f;
-        Colour next = jacobi;
-        if (!plain && own) {
-          Colour before;
-          std::memcpy(&before, solve.other.data() + S * p, sizeof before);
-          next = before + omega * (jacobi - before);
-        }
+        next[3] = 0.0f;
         Colour now;
         std::memcpy(&now, current.data() + S * p, sizeof now);
+        const Colour diff = next - now;
         for (int ch = 0; ch < 3; ++ch) {
-          const double change = std::fabs(static_cast<double>(next[ch]) - now[ch]);
-          if (std::isfinite(change)) residual = std::max(residual, change);
+          const float change = std::fabs(diff[ch]);
+          if (change > residual && change <= HUGE_VALF) residual = change;
         }
         std::memcpy(solve.other.data() + S * p, &next, sizeof next);
       }

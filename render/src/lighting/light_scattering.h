@@ -31,6 +31,7 @@ struct ScatterPlan {
   std::vector<std::int64_t> edge_offsets;  ///< edges of position k: [edge_offsets[k], edge_offsets[k+1])
   std::vector<std::int32_t> edge_ids;      ///< neighbour positions
   std::vector<float> weights;              ///< scatter_weights, in the same order
+  std::vector<float> weight_sums;          ///< per position: the sum of its weights (6, or 0 alone)
 };
 ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& weights);
 
@@ -66,6 +67,10 @@ void chebyshev_weights(int k, const std::array<double, 3>& sigma_s, std::array<d
 struct ScatterSolve {
   std::vector<float> other;          ///< L_{k-1} while iteration k + 1 runs, overwritten by L_{k+1}
   std::vector<std::uint8_t> finite;  ///< per position: its source is finite
+  /// Only when some source is not finite: the plan's weights with those points' weights 0, and
+  /// the sums of what is left (the plan's own are used otherwise).
+  std::vector<float> masked_weights, masked_sums;
+  bool masked = false;
   int iterations = 0;                ///< finished since the restart
   std::array<double, 3> omega{1.0, 1.0, 1.0};
   std::size_t next_chunk = 0;  ///< 0: the next piece begins an iteration
