@@ -39,6 +39,7 @@ struct ParallelRays {
     return {p.x - origin.x, p.y - origin.y, p.depth - origin.depth};
   }
   double scalar(std::int32_t id) const { return points[id].s; }
+  void prefetch(std::int32_t id) const { __builtin_prefetch(points + id); }
 };
 
 // Rays converging on a point light: each walk projects the points it meets into its own frame.
@@ -48,6 +49,10 @@ struct ConvergingRays {
   const float* scalars;
   Projected at(std::int32_t id) const { return frame.project(points[id]); }
   double scalar(std::int32_t id) const { return scalars[id]; }
+  void prefetch(std::int32_t id) const {
+    __builtin_prefetch(points + id);
+    __builtin_prefetch(scalars + id);
+  }
 };
 
 // The rays turned by a quarter turn (0 to 3) in the plane across them. The tie rule displaces
@@ -67,6 +72,7 @@ struct TurnedRays {
     return {p.y, -p.x, p.depth};
   }
   double scalar(std::int32_t id) const { return rays.scalar(id); }
+  void prefetch(std::int32_t id) const { rays.prefetch(id); }
 };
 
 // Where the ray crosses a face: the face's points and their weights (summing to 1).
@@ -105,8 +111,21 @@ public:
          bool snap = false)
       : m_in(in), m_rays(rays), m_v(v), m_length(length), m_record(record), m_snap(snap) {}
 
-  // Finds the start; false: the walk is already over (see trace()).
+  // Finds the start and enters the first tet, all at once; false: the walk is already over
+  // (see trace()). Then step() until it returns false.
   bool start(std::int32_t* cache) {
+    if (!begin(cache)) return false;
+    while (m_phase != Phase::peek)
+      if (!advance()) return false;
+    return true;
+  }
+
+  // The same walk in small phases, for walk_batch: each phase prefetches what the next one reads
+  // (the vertex's star, the points of its faces, the next tet, the new point of the next tet), so
+  // that its load overlaps the phases of the other walks in flight instead of stalling. begin()
+  // false: the walk is already over; then advance() until it returns false.
+  bool begin(std::int32_t* cache) {
+    m_cache = cache;
     if (cache && *cache == -2) {
       m_tr.kind = Trace::Kind::left_mesh;
       return false;
@@ -114,31 +133,76 @@ public:
     if (cache && *cache >= 0) {
       m_slot = *cache >> 2;
       m_k = *cache & 3;
-      const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
-      const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
-      (void)leaves_through(face);  // known to hold: only the crossing is wanted
-    } else {
-      const auto s_end = m_in.star_offsets[static_cast<std::size_t>(m_v) + 1];
-      for (auto s = m_in.star_offsets[static_cast<std::size_t>(m_v)]; s < s_end; ++s) {
-        const StarFace& f = m_in.star[static_cast<std::size_t>(s)];
-        if (leaves_through(f.v)) {
-          m_slot = f.record >> 2;
-          m_k = f.record & 3;
-          break;
-        }
-      }
-      if (cache) *cache = m_slot < 0 ? -2 : (m_slot << 2 | m_k);
-      if (m_slot < 0) {
-        m_tr.kind = Trace::Kind::left_mesh;
-        return false;
-      }
+      __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_slot)]);
+      m_phase = Phase::cached;
+      return true;
     }
-    m_grazed = false;
-    m_enter = {{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)};
-    keep(m_enter);
-    m_next = m_in.tets[static_cast<std::size_t>(m_slot)].next[m_k];
-    if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
+    __builtin_prefetch(&m_in.star_offsets[static_cast<std::size_t>(m_v)]);
+    m_rays.prefetch(m_v);
+    m_phase = Phase::offsets;
     return true;
+  }
+
+  bool advance() {
+    switch (m_phase) {
+      case Phase::offsets: {
+        m_star_begin = m_in.star_offsets[static_cast<std::size_t>(m_v)];
+        m_star_end = m_in.star_offsets[static_cast<std::size_t>(m_v) + 1];
+        const char* first = reinterpret_cast<const char*>(m_in.star.data() + m_star_begin);
+        const char* last = reinterpret_cast<const char*>(m_in.star.data() + m_star_end);
+        for (const char* line = first; line < last; line += 64) __builtin_prefetch(line);
+        if (last > first) __builtin_prefetch(last - 1);
+        m_phase = Phase::star;
+        return true;
+      }
+      case Phase::star:
+        for (auto s = m_star_begin; s < m_star_end; ++s)
+          for (std::int32_t id : m_in.star[static_cast<std::size_t>(s)].v) m_rays.prefetch(id);
+        m_phase = Phase::scan;
+        return true;
+      case Phase::scan:
+        for (auto s = m_star_begin; s < m_star_end; ++s) {
+          const StarFace& f = m_in.star[static_cast<std::size_t>(s)];
+          if (leaves_through(f.v)) {
+            m_slot = f.record >> 2;
+            m_k = f.record & 3;
+            break;
+          }
+        }
+        if (m_cache) *m_cache = m_slot < 0 ? -2 : (m_slot << 2 | m_k);
+        if (m_slot < 0) {
+          m_tr.kind = Trace::Kind::left_mesh;
+          return false;
+        }
+        __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_slot)]);
+        m_phase = Phase::enter;
+        return true;
+      case Phase::cached: {
+        const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
+        const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
+        (void)leaves_through(face);  // known to hold: only the crossing is wanted
+        m_phase = Phase::enter;
+        return true;
+      }
+      case Phase::enter:
+        m_grazed = false;
+        m_enter = {{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)};
+        keep(m_enter);
+        m_next = m_in.tets[static_cast<std::size_t>(m_slot)].next[m_k];
+        if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
+        m_phase = Phase::peek;
+        return true;
+      case Phase::peek:
+        // The next tet's record arrived while the other walks ran: its point opposite the entry
+        // face is the one the step reads that is not in cache yet.
+        if (m_next >= 0 && m_out.t < m_length) m_rays.prefetch(m_in.tets[static_cast<std::size_t>(m_next >> 2)].v[m_next & 3]);
+        m_phase = Phase::step;
+        return true;
+      case Phase::step:
+        m_phase = Phase::peek;
+        return step();
+    }
+    return false;
   }
 
   // Integrates the current tet's segment and moves on; false: the walk is over.
@@ -255,6 +319,10 @@ private:
     m_tr.end = m_length;
   }
 
+  // offsets -> star -> scan (a start to search for) or cached (a known one) -> enter, then
+  // peek -> step for every tet.
+  enum class Phase { offsets, star, scan, cached, enter, peek, step };
+
   const WalkInput& m_in;
   Rays m_rays;
   std::int32_t m_v;
@@ -265,6 +333,9 @@ private:
   bool m_grazed = false;
   std::int32_t m_slot = -1, m_next = -1;
   int m_k = -1, m_piece_hint = -1, m_moves = 0;
+  Phase m_phase = Phase::offsets;
+  std::int32_t* m_cache = nullptr;
+  std::int64_t m_star_begin = 0, m_star_end = 0;
   Crossing m_enter{}, m_out{};  // the segment in the current tet runs from m_enter to m_out
 };
 
@@ -308,12 +379,12 @@ void walk_interleaved(const WalkInput& in, WalkJob* jobs, std::size_t count, con
     }
     job.trace = w.trace();
   };
-  // Starts the next job that does not end at its start in slot k; false when none is left.
+  // Starts the next job in slot k (a job over at once is finished here); false when none is left.
   auto launch = [&](int k) {
     while (next_job < count) {
       WalkJob& job = jobs[next_job++];
       walkers[k].emplace(in, make_rays(job), job.v, job.length, job.record);
-      if (walkers[k]->start(job.start)) {
+      if (walkers[k]->begin(job.start)) {
         job_of[k] = static_cast<std::size_t>(&job - jobs);
         return true;
       }
@@ -326,7 +397,7 @@ void walk_interleaved(const WalkInput& in, WalkJob* jobs, std::size_t count, con
   for (int k = 0; k < kInFlight; ++k) active += launch(k) ? 1 : 0;
   while (active > 0)
     for (int k = 0; k < kInFlight; ++k) {
-      if (!walkers[k] || walkers[k]->step()) continue;
+      if (!walkers[k] || walkers[k]->advance()) continue;
       finish(jobs[job_of[k]], *walkers[k]);
       if (!launch(k)) --active;
     }
