@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "penumbra/core/morton.h"
 #include "penumbra/core/thread_pool.h"
 #include "tet_geometry.h"
 
@@ -82,8 +81,10 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 }
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
-  // This runs as one piece of a frame budget, so it avoids sorting all points: keys, slabs by a
-  // bucket count, Morton codes and the sorts within slabs.
+  // This runs as one piece of a frame budget, so it avoids sorting: keys and slabs by a bucket
+  // count. Within a slab the points keep their own order (any order is valid there): the light
+  // volume numbers them along a Morton curve, so consecutive walks stay in the same part of the
+  // mesh, and of memory.
   const std::size_t np = mesh.points.size();
   const Vec3d u = light.kind == Light::Kind::directional ? normalize(light.vector) : Vec3d{};
   std::vector<double> key(np);
@@ -108,31 +109,13 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
   const double width = 0.5 * step;
   const auto slab_of = [&](std::size_t p) { return static_cast<std::size_t>(std::floor((key[p] - k0) / width)); };
   const double span = (k1 - k0) / width;
-  // Within a group any order is valid; a Morton (Z-order) curve of 20 bits per axis keeps the
-  // walks of consecutive vertices in the same part of the mesh, and so of memory (sorted by key
-  // they would jump across the whole slab).
-  const Vec3d lo = mesh.bounds.lo, ext = mesh.bounds.hi - mesh.bounds.lo;
-  std::vector<std::uint64_t> codes(np, 0);
-  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; ++p) {
-      std::uint64_t code = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double f = std::clamp(ext[a] > 0 ? (mesh.points[p][a] - lo[a]) / ext[a] : 0.0, 0.0, 1.0);
-        code |= spread_bits_3d(static_cast<std::uint32_t>(f * 1048575.0)) << (2 - a);  // x most significant
-      }
-      codes[p] = code;
-    }
-  });
-  const auto by_code = [&](std::int32_t a, std::int32_t b) {
-    return codes[static_cast<std::size_t>(a)] < codes[static_cast<std::size_t>(b)];
-  };
   order.vertices.resize(used.size());
   if (!(span < 2.0 * static_cast<double>(used.size()))) {
     // Steps far below the point spacing (a user's choice): more slabs than points, so sort.
     order.vertices = used;
     std::sort(order.vertices.begin(), order.vertices.end(), [&](std::int32_t a, std::int32_t b) {
       const std::size_t sa = slab_of(static_cast<std::size_t>(a)), sb = slab_of(static_cast<std::size_t>(b));
-      return sa != sb ? sa < sb : by_code(a, b);
+      return sa != sb ? sa < sb : a < b;
     });
     for (std::size_t i = 0; i < order.vertices.size(); ++i)
       if (i + 1 == order.vertices.size() || slab_of(static_cast<std::size_t>(order.vertices[i])) !=
@@ -146,13 +129,6 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
     for (std::int32_t p : used) order.vertices[fill[slab_of(static_cast<std::size_t>(p))]++] = p;
     for (std::size_t g = 1; g < start.size(); ++g)
       if (start[g] > start[g - 1]) order.group_end.push_back(start[g]);
-    parallel_for(order.group_end.size(), 16, [&](std::size_t gb, std::size_t ge) {
-      for (std::size_t g = gb; g < ge; ++g) {
-        const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1];
-        std::sort(order.vertices.begin() + static_cast<std::ptrdiff_t>(begin),
-                  order.vertices.begin() + static_cast<std::ptrdiff_t>(order.group_end[g]), by_code);
-      }
-    });
   }
   for (std::size_t g = 0, begin = 0; g < order.group_end.size(); begin = order.group_end[g++])
     for (std::size_t i = begin; i < order.group_end[g]; ++i)
@@ -397,7 +373,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   bool first_batch = true;
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
-    for (std::size_t b = std::max(begin, state.next_vertex); b < end; b += kLevel1Batch) {
+    for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {
       const std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
       const auto expected = std::chrono::duration<double, std::milli>(std::max(0.0, state.vertex_ms) * static_cast<double>(e - b));
@@ -422,6 +398,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       const double per_vertex =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count() / static_cast<double>(e - b);
       state.vertex_ms = state.vertex_ms < 0 ? per_vertex : 0.5 * (state.vertex_ms + per_vertex);
+      b = e;
     }
     state.next_vertex = 0;
     for (std::size_t i = begin; i < end; ++i) {

@@ -65,8 +65,8 @@ double transverse_change(const Vec3d p[4], const double value[4], const Vec3d& u
 /// Vertices grouped along the light by their key (directional: x . u; point: distance from the
 /// light) into the slabs [k0 + g step / 2, k0 + (g + 1) step / 2), k0 the smallest key, empty
 /// slabs left out: a departure point lies a full step upstream, so the tet holding it has its
-/// vertices in earlier groups unless it is thicker than step / 2. Within a group, vertices follow
-/// a Morton curve.
+/// vertices in earlier groups unless it is thicker than step / 2. Within a group, vertices keep
+/// the order of their ids.
 struct VertexOrder {
   std::vector<std::int32_t> vertices;
   std::vector<std::size_t> group_end;
