@@ -148,6 +148,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   const Vec3d back = point ? Vec3d{} : -normalize(light.vector);
   const std::size_t np = rho1.size();
   state.prepare_walks(np, ctx.record_walks);
+  state.changed_now.clear();
   if (!state.in_pass) {
     state.full = state.departure_corners.size() != np;
     if (state.full) {
@@ -406,6 +407,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       const float change = std::fabs(state.next[v] - rho1[v]);
       residual = std::max(residual, static_cast<double>(change));
       state.changed[v] = change > 0.0f;
+      if (!(state.next[v] == rho1[v])) state.changed_now.push_back(static_cast<std::int32_t>(v));
       rho1[v] = state.next[v];
     }
   }

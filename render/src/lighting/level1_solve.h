@@ -100,6 +100,9 @@ struct PassState {
   /// the tets. Empty after clear(): the next pass is full.
   std::vector<std::array<std::int32_t, 4>> departure_corners;
   std::vector<std::uint8_t> stale, changed;
+  /// The vertices whose value changed during the last call (so that only they are combined and
+  /// copied out after it).
+  std::vector<std::int32_t> changed_now;
   std::vector<float> next;
   std::vector<ParallelPoint> parallel;  ///< a directional light's projections, built per full pass
   // A pass interrupted by its deadline resumes at next_group, vertex next_vertex of the order.

@@ -119,7 +119,12 @@ struct LightVolume::Impl {
   std::vector<LightState> lights;
   std::vector<float> pre, rgb, previous_pre;
   double pre_scale = 0;
-  bool combine_pending = true, scatter_done = false;
+  bool pre_scale_stale = false;
+  // combine_pending: every point is combined and copied out; else only combine_points (the
+  // points whose level-1 value changed since), and copied out are only those of the last
+  // combine (published_points) unless the scattering ran (publish_all).
+  bool combine_pending = true, scatter_done = false, publish_all = true;
+  std::vector<std::int32_t> combine_points, published_points;
   int scatter_iterations = 0;
   double scatter_residual = HUGE_VAL;
   bool scatter_converged = false;
@@ -147,13 +152,20 @@ struct LightVolume::Impl {
   // The light colour in the caller's point order (light_rho's copies are made when asked for).
   void publish() {
     const std::size_t np = point_order.size();
-    rgb_out.resize(3 * np);
-    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const auto p = static_cast<std::size_t>(point_order[i]);
-        for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
-      }
-    });
+    auto copy_out = [&](std::size_t i) {
+      const auto p = static_cast<std::size_t>(point_order[i]);
+      for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
+    };
+    if (publish_all || rgb_out.size() != 3 * np) {
+      rgb_out.resize(3 * np);
+      parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) copy_out(i);
+      });
+    } else {
+      for (std::int32_t i : published_points) copy_out(static_cast<std::size_t>(i));
+    }
+    publish_all = false;
+    published_points.clear();
     for (auto& l : lights) l.rho1_out_stale = true;
   }
   void mark_all() {
@@ -229,8 +241,9 @@ struct LightVolume::Impl {
       std::atomic<std::size_t> lost{0};
       finished = lighting::level1_pass(ctx, l.light, l.rho0, l.order, l.rho1, l.pass_state, lost, deadline);
       report.lost_traces += lost.load();
+      combine_points.insert(combine_points.end(), l.pass_state.changed_now.begin(), l.pass_state.changed_now.end());
     }
-    combine_pending = true;
+    if (gpu) combine_pending = true;
     report.l1_prop_ms += ms_since(t0);
     if (!finished) return false;
     // A pass moves the light by one step, so with steps far below an edge the change per pass
@@ -244,13 +257,61 @@ struct LightVolume::Impl {
     if (l.converged || l.passes >= opt.level1_max_passes) l.stage = LightState::Stage::done;
     return true;
   }
+  // The lights' sum at point p, channel c.
+  float combined(std::size_t p, int c) const {
+    float v = 0.0f;
+    for (const auto& l : lights)
+      if (l.has_solution) v += static_cast<float>(l.rho1[p] * l.light.color[c]);
+    return v;
+  }
   void combine() {
-    // Runs inside a frame's budget after every level-1 piece: parallel, and into kept buffers
-    // (a fresh 12-byte-per-point vector each time cost page faults on top of the arithmetic).
     const std::size_t np = mesh->points.size();
+    const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
+    if (!combine_pending && has_rgb && pre.size() == 3 * np && rgb.size() == 3 * np) {
+      // Only the points a level-1 call changed (a frame's share of a pass: a few percent of
+      // them). rgb is either pre (no scattering) or warm-started from it, so per point the same
+      // update as below; the scale is recomputed when the scattering starts.
+      for (std::int32_t point : combine_points) {
+        const auto p = static_cast<std::size_t>(point);
+        for (int c = 0; c < 3; ++c) {
+          const std::size_t i = 3 * p + c;
+          const float v = combined(p, c), delta = v - pre[i];
+          pre[i] = v;
+          if (!scatter) {
+            rgb[i] = v;
+          } else if (std::isfinite(delta)) {
+            rgb[i] += delta;
+          }
+        }
+      }
+      published_points.insert(published_points.end(), combine_points.begin(), combine_points.end());
+      combine_points.clear();
+      pre_scale_stale = true;
+      source_changed(scatter);
+      return;
+    }
+    combine_all(scatter);
+  }
+  void source_changed(bool scatter) {
+    has_rgb = true;
+    scatter_done = !scatter;
+    scatter_converged = !scatter;
+    scatter_residual = scatter ? HUGE_VAL : 0.0;
+    scatter_iterations = 0;
+    combine_pending = false;
+    gpu_scatter_stale = true;
+    cpu_scatter_stale = true;
+    solve.restart();
+  }
+  void combine_all(bool scatter) {
+    // Runs inside a frame's budget: parallel, and into kept buffers (a fresh 12-byte-per-point
+    // vector each time cost page faults on top of the arithmetic).
+    const std::size_t np = mesh->points.size();
+    combine_points.clear();
+    publish_all = true;
+    pre_scale_stale = false;
     previous_pre.swap(pre);
     pre.resize(3 * np);
-    const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
     const bool warm = scatter && has_rgb && previous_pre.size() == pre.size();
     if (!warm) rgb.resize(3 * np);
     constexpr std::size_t kChunk = 1 << 14;
@@ -259,9 +320,7 @@ struct LightVolume::Impl {
       double chunk_scale = 0;
       for (std::size_t p = b; p < e; ++p)
         for (int c = 0; c < 3; ++c) {
-          float v = 0.0f;
-          for (const auto& l : lights)
-            if (l.has_solution) v += static_cast<float>(l.rho1[p] * l.light.color[c]);
+          const float v = combined(p, c);
           const std::size_t i = 3 * p + c;
           pre[i] = v;
           if (std::isfinite(v)) chunk_scale = std::max(chunk_scale, static_cast<double>(std::fabs(v)));
@@ -277,15 +336,21 @@ struct LightVolume::Impl {
       scale[b / kChunk] = chunk_scale;
     });
     pre_scale = scale.empty() ? 0.0 : *std::max_element(scale.begin(), scale.end());
-    has_rgb = true;
-    scatter_done = !scatter;
-    scatter_converged = !scatter;
-    scatter_residual = scatter ? HUGE_VAL : 0.0;
-    scatter_iterations = 0;
-    combine_pending = false;
-    gpu_scatter_stale = true;
-    cpu_scatter_stale = true;
-    solve.restart();
+    source_changed(scatter);
+  }
+  // The largest finite |pre|, the scale of the scattering's tolerance.
+  void update_pre_scale() {
+    if (!pre_scale_stale) return;
+    constexpr std::size_t kChunk = 1 << 16;
+    std::vector<double> scale((pre.size() + kChunk - 1) / kChunk, 0.0);
+    parallel_for(pre.size(), kChunk, [&](std::size_t b, std::size_t e) {
+      double m = 0;
+      for (std::size_t i = b; i < e; ++i)
+        if (std::isfinite(pre[i])) m = std::max(m, static_cast<double>(std::fabs(pre[i])));
+      scale[b / kChunk] = m;
+    });
+    pre_scale = scale.empty() ? 0.0 : *std::max_element(scale.begin(), scale.end());
+    pre_scale_stale = false;
   }
 };
 
@@ -425,7 +490,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       did_work = true;
     }
   bool combined = false;
-  if (im.combine_pending) {
+  if (im.combine_pending || !im.combine_points.empty()) {
     const auto tc = Clock::now();
     im.combine();
     im.last_combine_ms = ms_since(tc);
@@ -441,6 +506,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     // The iterates are stored in float, and an iteration that reads only the previous iterate
     // settles within a few units in the last place, not on an exact fixed point: a tolerance
     // below 16 of them (1e-6 relative) is raised to that.
+    im.update_pre_scale();
     const double tolerance = std::max(im.opt.scatter_tolerance, kScatterToleranceFloor) * std::max(im.pre_scale, 1e-300);
     bool gpu_ran = false, cpu_ran = false;
     while (!im.scatter_done) {
@@ -489,6 +555,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
     if (cpu_ran) lighting::to_point_order(im.scatter_plan, im.rgb_planned, im.rgb);
+    im.publish_all = im.publish_all || gpu_ran || cpu_ran;
     report.l1_scatter_ms += ms_since(ts);
   }
   // Converged: every stage finished at its tolerance. A stage stopped by its iteration cap is
