@@ -513,7 +513,11 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       // The CPU sweeps in pieces of whole blocks (two or more, one per core): as many as the
       // budget has room for, timed per block; the GPU runs whole iterations.
       std::size_t chunks = lighting::kScatterChunks - im.solve.next_chunk;
-      if (im.gpu || im.last_chunk_ms < 0 || !std::isfinite(budget.max_ms)) {
+      if (!im.gpu && im.last_chunk_ms < 0 && std::isfinite(budget.max_ms)) {
+        // Never timed: one block (1/16 of an iteration) as a probe, which any room left will do.
+        if (!allowed(0.0)) break;
+        chunks = 1;
+      } else if (im.gpu || !std::isfinite(budget.max_ms)) {
         if (!allowed(im.gpu ? im.last_sweep_ms : im.last_chunk_ms < 0 ? -1.0 : im.last_chunk_ms * chunks)) break;
       } else {
         if (!allowed(0.0)) break;  // the work-unit cap
