@@ -276,13 +276,16 @@ private:
     for (int j = 0; j < 3; ++j) {
       const int a = (j + 1) % 3, b = (j + 2) % 3;  // e(b, c) weighs a, and cyclically
       e[j] = edge(q[a], face[a], q[b], face[b]);
-      positive = positive && edge_positive(e[j], q[a], face[a], q[b], face[b]);
+      if (edge_positive(e[j], q[a], face[a], q[b], face[b])) continue;
+      positive = false;
+      // Clearly outside this edge: neither the start nor touched on its rim. Most faces of the
+      // star end here, at their first or second edge.
+      if (e[j] < -noise(q[a], q[b])) return false;
     }
     if (!positive) {
-      // Touched on its rim, up to rounding noise: the ray runs along the boundary.
-      bool touched = true;
-      for (int j = 0; j < 3; ++j) touched = touched && e[j] >= -noise(q[(j + 1) % 3], q[(j + 2) % 3]);
-      m_grazed = m_grazed || touched;
+      // Touched on its rim (every edge at least -noise), up to rounding noise: the ray runs
+      // along the boundary.
+      m_grazed = true;
       return false;
     }
     const double w3[3] = {std::max(0.0, e[0]), std::max(0.0, e[1]), std::max(0.0, e[2])};
