@@ -94,49 +94,54 @@ double scatter_iteration(const ScatterPlan& plan, const std::vector<float>& pre,
   return solve.residual;
 }
 
+void scatter_prepare(const ScatterPlan& plan, const std::vector<float>& pre, std::vector<float>& current,
+                     ScatterSolve& solve) {
+  constexpr std::size_t S = kPlannedStride;
+  const std::size_t np = plan.order.size();
+  // Which points have a finite source, once per solve. Points without one are left out of
+  // every sum by a masked copy of the weights, made only when there are any, so that the
+  // inner loop has no test.
+  solve.finite.resize(np);
+  std::vector<std::uint8_t> any(kScatterChunks, 0);
+  parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
+    for (std::size_t c = c0; c < c1; ++c)
+      for (std::size_t p = plan.chunk_begin[c]; p < plan.chunk_begin[c + 1]; ++p) {
+        solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
+        any[c] |= !solve.finite[p];
+        // A weight of 0 does not remove a NaN (0 * NaN is NaN): a start value that is not
+        // finite is replaced by the source, or 0 where that is not finite either.
+        for (std::size_t ch = 0; ch < 3; ++ch)
+          if (!std::isfinite(current[S * p + ch])) current[S * p + ch] = solve.finite[p] ? pre[S * p + ch] : 0.0f;
+      }
+  });
+  solve.masked = std::find(any.begin(), any.end(), 1) != any.end();
+  if (solve.masked) {
+    solve.masked_weights = plan.weights;
+    solve.masked_sums.assign(np, 0.0f);
+    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+      for (std::size_t p = b; p < e; ++p)
+        for (auto s = plan.edge_offsets[p]; s < plan.edge_offsets[p + 1]; ++s) {
+          float& w = solve.masked_weights[static_cast<std::size_t>(s)];
+          if (!solve.finite[static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(s)])]) w = 0.0f;
+          solve.masked_sums[p] += w;
+        }
+    });
+  } else {
+    solve.masked_weights = {};
+    solve.masked_sums = {};
+  }
+  solve.other.resize(current.size());
+  solve.prepared = true;
+}
+
 bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& pre, const std::array<double, 3>& sigma_s,
                             std::vector<float>& current, ScatterSolve& solve, std::size_t chunks) {
   // Four channels (the fourth is padding) in one vector: a neighbour costs one load and one
   // multiply-add. Sums in float: a dozen positive terms, relative error ~1e-7.
   typedef float Colour __attribute__((vector_size(16)));
   constexpr std::size_t S = kPlannedStride;
-  const std::size_t np = plan.order.size();
+  if (!solve.prepared) scatter_prepare(plan, pre, current, solve);
   if (solve.next_chunk == 0) {
-    if (solve.iterations == 0) {
-      // Which points have a finite source, once per solve. Points without one are left out of
-      // every sum by a masked copy of the weights, made only when there are any, so that the
-      // inner loop has no test.
-      solve.finite.resize(np);
-      std::vector<std::uint8_t> any(kScatterChunks, 0);
-      parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
-        for (std::size_t c = c0; c < c1; ++c)
-          for (std::size_t p = plan.chunk_begin[c]; p < plan.chunk_begin[c + 1]; ++p) {
-            solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
-            any[c] |= !solve.finite[p];
-            // A weight of 0 does not remove a NaN (0 * NaN is NaN): a start value that is not
-            // finite is replaced by the source, or 0 where that is not finite either.
-            for (std::size_t ch = 0; ch < 3; ++ch)
-              if (!std::isfinite(current[S * p + ch])) current[S * p + ch] = solve.finite[p] ? pre[S * p + ch] : 0.0f;
-          }
-      });
-      solve.masked = std::find(any.begin(), any.end(), 1) != any.end();
-      if (solve.masked) {
-        solve.masked_weights = plan.weights;
-        solve.masked_sums.assign(np, 0.0f);
-        parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-          for (std::size_t p = b; p < e; ++p)
-            for (auto s = plan.edge_offsets[p]; s < plan.edge_offsets[p + 1]; ++s) {
-              float& w = solve.masked_weights[static_cast<std::size_t>(s)];
-              if (!solve.finite[static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(s)])]) w = 0.0f;
-              solve.masked_sums[p] += w;
-            }
-        });
-      } else {
-        solve.masked_weights = {};
-        solve.masked_sums = {};
-      }
-      solve.other.resize(current.size());
-    }
     chebyshev_weights(solve.iterations, sigma_s, solve.omega);
     solve.residual = 0.0;
   }

@@ -73,14 +73,21 @@ struct ScatterSolve {
   bool masked = false;
   int iterations = 0;                ///< finished since the restart
   std::array<double, 3> omega{1.0, 1.0, 1.0};
+  bool prepared = false;       ///< finite and the masked weights are set for this solve
   std::size_t next_chunk = 0;  ///< 0: the next piece begins an iteration
   double residual = 0.0;       ///< largest change so far in this iteration
   void restart() {
+    prepared = false;
     next_chunk = 0;
     iterations = 0;
   }
 };
 
+/// What a solve sets up once before its first iteration (scatter_iteration_part does it when it
+/// has not been done): which sources are finite, the weights without the others, and a start
+/// `current` without non-finite values. A piece of its own in a frame budget.
+void scatter_prepare(const ScatterPlan& plan, const std::vector<float>& pre, std::vector<float>& current,
+                     ScatterSolve& solve);
 /// Runs blocks [next_chunk, next_chunk + chunks) of an iteration (at least one; beginning the
 /// iteration when next_chunk is 0), so that a frame's time budget is not left unused for want of
 /// room for a whole one. `current` (kPlannedStride floats per position of the plan) holds the

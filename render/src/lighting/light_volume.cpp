@@ -136,6 +136,7 @@ struct LightVolume::Impl {
   lighting::ScatterSolve solve;  // the CPU iteration in progress (a frame may end inside one)
   double last_chunk_ms = -1;     // one block of a CPU iteration
   double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
+  double last_full_publish_ms = 0, last_copy_back_ms = 0, last_scatter_setup_ms = -1;
   double last_publish_ms = 0;  // copying the results to the caller's order ends every call: kept out of the budget
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
@@ -150,13 +151,15 @@ struct LightVolume::Impl {
     for (auto& l : lights) l.forget_direction();  // the step sets the vertex groups
   }
   // The light colour in the caller's point order (light_rho's copies are made when asked for).
-  void publish() {
+  // Returns whether every point was copied.
+  bool publish() {
     const std::size_t np = point_order.size();
     auto copy_out = [&](std::size_t i) {
       const auto p = static_cast<std::size_t>(point_order[i]);
       for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
     };
-    if (publish_all || rgb_out.size() != 3 * np) {
+    const bool all = publish_all || rgb_out.size() != 3 * np;
+    if (all) {
       rgb_out.resize(3 * np);
       parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) copy_out(i);
@@ -167,6 +170,7 @@ struct LightVolume::Impl {
     publish_all = false;
     published_points.clear();
     for (auto& l : lights) l.rho1_out_stale = true;
+    return all;
   }
   void mark_all() {
     for (auto& l : lights) l.stage = LightState::Stage::level0;
@@ -446,13 +450,15 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     report.resample_ms = ms_since(tr);
     did_work = true;
   }
+  // Room kept for what ends the call: copying the results out (see the scattering below).
+  double reserve_ms = im.last_publish_ms;
   // A piece of work starts only if it is expected (from its last duration) to end within the
   // time budget; the first piece of a call always starts, so every call makes progress.
   // A piece never timed yet (expected_ms < 0) starts only as the first of a call.
   auto allowed = [&](double expected_ms) {
     if (budget.max_work_units >= 0 && report.work_units >= budget.max_work_units) return false;
     if (expected_ms < 0) return !did_work || !std::isfinite(budget.max_ms);
-    return !did_work || ms_since(t0) + expected_ms + im.last_publish_ms < budget.max_ms;
+    return !did_work || ms_since(t0) + expected_ms + reserve_ms < budget.max_ms;
   };
   using Stage = Impl::LightState::Stage;
   for (auto& l : im.lights) {
@@ -503,13 +509,31 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   for (const auto& l : im.lights) lights_settled = lights_settled && l.stage == Stage::done;
   if (!im.scatter_done && lights_settled) {
     const auto ts = Clock::now();
-    // The iterates are stored in float, and an iteration that reads only the previous iterate
-    // settles within a few units in the last place, not on an exact fixed point: a tolerance
-    // below 16 of them (1e-6 relative) is raised to that.
-    im.update_pre_scale();
-    const double tolerance = std::max(im.opt.scatter_tolerance, kScatterToleranceFloor) * std::max(im.pre_scale, 1e-300);
+    // A frame that scatters ends with the iterate copied back to point order and every point
+    // copied out, not only those a level-1 piece changed: the budget holds room for both.
+    reserve_ms = std::max(im.last_publish_ms, im.last_full_publish_ms) + (im.gpu ? 0.0 : im.last_copy_back_ms);
     bool gpu_ran = false, cpu_ran = false;
     while (!im.scatter_done) {
+      if (!im.gpu && im.cpu_scatter_stale) {
+        // The solve's set-up as a piece of its own: the source and the start in the plan's
+        // order, the tolerance's scale, which sources are finite.
+        if (!allowed(im.last_scatter_setup_ms)) break;
+        const auto tw = Clock::now();
+        im.update_pre_scale();
+        lighting::to_plan_order(im.scatter_plan, im.pre, im.pre_planned);
+        lighting::to_plan_order(im.scatter_plan, im.rgb, im.rgb_planned);
+        lighting::scatter_prepare(im.scatter_plan, im.pre_planned, im.rgb_planned, im.solve);
+        im.cpu_scatter_stale = false;
+        im.last_scatter_setup_ms = ms_since(tw);
+        did_work = true;
+        cpu_ran = true;
+        continue;
+      }
+      // The iterates are stored in float, and an iteration that reads only the previous iterate
+      // settles within a few units in the last place, not on an exact fixed point: a tolerance
+      // below 16 of them (1e-6 relative) is raised to that.
+      im.update_pre_scale();
+      const double tolerance = std::max(im.opt.scatter_tolerance, kScatterToleranceFloor) * std::max(im.pre_scale, 1e-300);
       // The CPU sweeps in pieces of whole blocks (two or more, one per core): as many as the
       // budget has room for, timed per block; the GPU runs whole iterations.
       std::size_t chunks = lighting::kScatterChunks - im.solve.next_chunk;
@@ -521,7 +545,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         if (!allowed(im.gpu ? im.last_sweep_ms : im.last_chunk_ms < 0 ? -1.0 : im.last_chunk_ms * chunks)) break;
       } else {
         if (!allowed(0.0)) break;  // the work-unit cap
-        const double room = budget.max_ms - ms_since(t0) - im.last_publish_ms;
+        const double room = budget.max_ms - ms_since(t0) - reserve_ms;
         const auto fit = static_cast<std::size_t>(std::max(0.0, room / im.last_chunk_ms));
         if (did_work && fit < 2) break;
         chunks = std::min(chunks, std::max<std::size_t>(fit, 2));
@@ -538,11 +562,6 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         ran = im.gpu->scatter(most, tolerance, im.opt.sigma_s, im.scatter_residual);
         gpu_ran = true;
       } else {
-        if (im.cpu_scatter_stale) {
-          lighting::to_plan_order(im.scatter_plan, im.pre, im.pre_planned);
-          lighting::to_plan_order(im.scatter_plan, im.rgb, im.rgb_planned);
-        }
-        im.cpu_scatter_stale = false;
         const bool whole = lighting::scatter_iteration_part(im.scatter_plan, im.pre_planned, im.opt.sigma_s,
                                                             im.rgb_planned, im.solve, chunks);
         cpu_ran = true;
@@ -558,7 +577,11 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
       if (im.scatter_converged || im.scatter_iterations >= im.opt.scatter_max_iterations) im.scatter_done = true;
     }
     if (gpu_ran) im.gpu->read_scatter(im.rgb);
-    if (cpu_ran) lighting::to_point_order(im.scatter_plan, im.rgb_planned, im.rgb);
+    if (cpu_ran) {
+      const auto tb = Clock::now();
+      lighting::to_point_order(im.scatter_plan, im.rgb_planned, im.rgb);
+      im.last_copy_back_ms = ms_since(tb);
+    }
     im.publish_all = im.publish_all || gpu_ran || cpu_ran;
     report.l1_scatter_ms += ms_since(ts);
   }
@@ -574,8 +597,9 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (!im.scatter_converged) report.residual = std::max(report.residual, im.scatter_residual);
   if (did_work || combined) {
     const auto tp = Clock::now();
-    im.publish();
+    const bool full = im.publish();
     im.last_publish_ms = ms_since(tp);
+    if (full) im.last_full_publish_ms = im.last_publish_ms;
   }
   report.total_ms = ms_since(t0);
   return report;
