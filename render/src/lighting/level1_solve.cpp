@@ -150,6 +150,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   state.prepare_walks(np, ctx.record_walks);
   state.changed_now.clear();
   if (!state.in_pass) {
+    const auto setup_start = std::chrono::steady_clock::now();
     state.full = state.departure_corners.size() != np;
     if (state.full) {
       state.departure_corners.resize(np);
@@ -164,6 +165,8 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     // A directional light's rays are all parallel: every point projected once per pass start
     // (the field's scalars ride along), so a walk step reads one 32-byte record per point.
     if (!point && state.full) project_parallel(mesh, back, ctx.field.scalars, state.parallel);
+    if (state.full)
+      state.full_setup_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - setup_start).count();
   }
   const bool full = state.full;
   const auto& topo = ctx.topology;

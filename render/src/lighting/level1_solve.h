@@ -112,6 +112,9 @@ struct PassState {
   /// Recent time per vertex of a batch (ms; < 0: none timed yet): a batch starts only if it is
   /// expected to end by the deadline. Kept across clear().
   double vertex_ms = -1.0;
+  /// The set-up of the last full pass (ms; < 0: none yet): its arrays and a directional light's
+  /// projections, which come before its first batch. Kept across clear().
+  double full_setup_ms = -1.0;
   void clear() {
     departure_corners.clear();
     in_pass = false;

@@ -463,13 +463,23 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   using Stage = Impl::LightState::Stage;
   for (auto& l : im.lights) {
     if (l.stage != Stage::level0) continue;
-    if (!allowed(im.last_level0_ms)) break;
+    // A light that moved also needs its vertex order: built in the same piece, so that a new
+    // light does not spend a frame on each of two pieces never timed before.
+    const bool with_order = !l.order_valid && !im.gpu;
+    if (!allowed(im.last_level0_ms + (with_order ? std::max(0.0, im.last_order_ms) : 0.0))) break;
     const auto tl = Clock::now();
     im.solve_level0(l, report);
     im.last_level0_ms = ms_since(tl);
+    if (with_order) {
+      const auto to = Clock::now();
+      im.ensure_order(l);
+      im.last_order_ms = ms_since(to);
+      report.l1_prop_ms += im.last_order_ms;
+    }
     ++report.work_units;
     did_work = true;
   }
+  const std::size_t mesh_points = im.mesh->points.size();
   const auto deadline =
       std::isfinite(budget.max_ms)
           ? t0 + std::chrono::duration_cast<Clock::duration>(
@@ -487,9 +497,13 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         continue;
       }
       // A CPU pass stops at the deadline by itself; it starts only with room for one batch of
-      // the size last timed (unknown: only as the first piece of a call).
-      const double batch_ms = l.pass_state.vertex_ms * static_cast<double>(lighting::kLevel1Batch);
-      if (!allowed(im.gpu ? im.last_gpu_pass_ms : l.pass_state.vertex_ms < 0 ? -1.0 : batch_ms)) break;
+      // the size last timed, and a full pass also for its set-up (unknown: only as the first
+      // piece of a call).
+      const auto& ps = l.pass_state;
+      const bool starts_full = !ps.in_pass && ps.departure_corners.size() != mesh_points;
+      double expected = ps.vertex_ms < 0 ? -1.0 : ps.vertex_ms * static_cast<double>(lighting::kLevel1Batch);
+      if (starts_full && expected >= 0) expected = ps.full_setup_ms < 0 ? -1.0 : expected + ps.full_setup_ms;
+      if (!allowed(im.gpu ? im.last_gpu_pass_ms : expected)) break;
       const auto tp = Clock::now();
       if (im.level1_pass(l, report, deadline)) ++report.work_units;
       if (im.gpu) im.last_gpu_pass_ms = ms_since(tp);
