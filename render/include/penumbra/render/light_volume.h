@@ -64,9 +64,12 @@
 // that differ, and update() spends at most a budget of work units or milliseconds, resuming
 // where it stopped on the next call; light_rgb() always holds the current estimate. A time
 // budget can stop a level-1 pass between two batches of vertices; the indivisible pieces are the
-// level-0 resampling after set_field, one level-0 solve, one batch and one scattering iteration
-// (a few to a few tens of ms at 1M tets). A piece starts only if its last duration still fits,
-// except the first of a call, so every call makes progress and overruns are small. A changed light is warm-started from its previous level-1
+// level-0 resampling after set_field, one level-0 solve (with a moved light's vertex order), a
+// full pass's set-up, one batch, the scattering's set-up and one block of a scattering iteration
+// (a few ms at 1M tets). A piece starts only if its last duration, plus the copy of the results
+// that ends the call, still fits, except the first of a call, so every call makes progress and
+// overruns are small. After a level-1 piece only the points it changed are combined and copied
+// out. A changed light is warm-started from its previous level-1
 // solution, corrected by the change of its level-0 solution; the scattering from its previous
 // solution plus the change of its source. A light that did not move keeps its vertex order and
 // the tet each vertex's walk starts in.
