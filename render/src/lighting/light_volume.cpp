@@ -268,36 +268,40 @@ struct LightVolume::Impl {
       if (l.has_solution) v += static_cast<float>(l.rho1[p] * l.light.color[c]);
     return v;
   }
+  // Point value i of the combined source becomes v. Warm start: the previous scattered field
+  // plus the change of its source (exact when the source changed by a constant; `before` is the
+  // source it was scattered from); otherwise, the unscattered field.
+  void set_source(std::size_t i, float v, float before, bool warm) {
+    pre[i] = v;
+    if (!warm) {
+      rgb[i] = v;
+    } else {
+      const float delta = v - before;
+      if (std::isfinite(delta)) rgb[i] += delta;
+    }
+  }
   void combine() {
     const std::size_t np = mesh->points.size();
     const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
     if (!combine_pending && has_rgb && pre.size() == 3 * np && rgb.size() == 3 * np) {
       // Only the points a level-1 call changed (a frame's share of a pass: a few percent of
-      // them). rgb is either pre (no scattering) or warm-started from it, so per point the same
-      // update as below; the scale is recomputed when the scattering starts.
+      // them), each updated as by combine_all.
       for (std::int32_t point : combine_points) {
         const auto p = static_cast<std::size_t>(point);
-        for (int c = 0; c < 3; ++c) {
-          const std::size_t i = 3 * p + c;
-          const float v = combined(p, c), delta = v - pre[i];
-          pre[i] = v;
-          if (!scatter) {
-            rgb[i] = v;
-          } else if (std::isfinite(delta)) {
-            rgb[i] += delta;
-          }
-        }
+        for (int c = 0; c < 3; ++c) set_source(3 * p + c, combined(p, c), pre[3 * p + c], scatter);
       }
       published_points.insert(published_points.end(), combine_points.begin(), combine_points.end());
       combine_points.clear();
-      pre_scale_stale = true;
       source_changed(scatter);
       return;
     }
     combine_all(scatter);
   }
+  // The scattering starts over from the new source; its tolerance's scale is recomputed when it
+  // starts (update_pre_scale).
   void source_changed(bool scatter) {
     has_rgb = true;
+    pre_scale_stale = true;
     scatter_done = !scatter;
     scatter_converged = !scatter;
     scatter_residual = scatter ? HUGE_VAL : 0.0;
@@ -313,33 +317,17 @@ struct LightVolume::Impl {
     const std::size_t np = mesh->points.size();
     combine_points.clear();
     publish_all = true;
-    pre_scale_stale = false;
     previous_pre.swap(pre);
     pre.resize(3 * np);
     const bool warm = scatter && has_rgb && previous_pre.size() == pre.size();
     if (!warm) rgb.resize(3 * np);
-    constexpr std::size_t kChunk = 1 << 14;
-    std::vector<double> scale((np + kChunk - 1) / kChunk, 0.0);
-    parallel_for(np, kChunk, [&](std::size_t b, std::size_t e) {
-      double chunk_scale = 0;
+    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
       for (std::size_t p = b; p < e; ++p)
         for (int c = 0; c < 3; ++c) {
-          const float v = combined(p, c);
           const std::size_t i = 3 * p + c;
-          pre[i] = v;
-          if (std::isfinite(v)) chunk_scale = std::max(chunk_scale, static_cast<double>(std::fabs(v)));
-          // Warm start: the previous scattered field plus the change of its source (exact when
-          // the source changed by a constant); the first time, the unscattered field.
-          if (!warm) {
-            rgb[i] = v;
-          } else {
-            const float delta = v - previous_pre[i];
-            if (std::isfinite(delta)) rgb[i] += delta;
-          }
+          set_source(i, combined(p, c), warm ? previous_pre[i] : 0.0f, warm);
         }
-      scale[b / kChunk] = chunk_scale;
     });
-    pre_scale = scale.empty() ? 0.0 : *std::max_element(scale.begin(), scale.end());
     source_changed(scatter);
   }
   // The largest finite |pre|, the scale of the scattering's tolerance.
