@@ -9,6 +9,16 @@
 namespace penumbra::lighting_test {
 namespace {
 
+// A light volume on `mesh` for field s through tf and `lights`, solved to convergence.
+LightVolume converged_volume(const std::shared_ptr<const TetMesh>& mesh, const LightVolumeOptions& opt,
+                             const std::vector<float>& s, const TransferFunction& tf, std::vector<Light> lights) {
+  LightVolume lv(mesh, opt);
+  lv.set_field(s, tf);
+  lv.set_lights(std::move(lights));
+  EXPECT_TRUE(lv.update().converged);
+  return lv;
+}
+
 // Homogeneous slab [0,2]x[0,1]^2, tau = 1.5, light along +x: rho = exp(-1.5 x) exactly. The
 // level-0 sweep is exact for a grid-aligned light (exponential fitting) and every level-1 step
 // integrates a constant tau exactly, so only float storage (1e-7) remains.
@@ -45,10 +55,7 @@ TEST(LightAccuracy, HomogeneousSlabObliqueMatchesReference) {
   const Light light = directional({1, 0.4, 0.25});
   LightVolumeOptions opt;
   opt.level0_resolution = 33;
-  LightVolume lv(mesh, opt);
-  lv.set_field(s, tf);
-  lv.set_lights({light});
-  EXPECT_TRUE(lv.update().converged);
+  const LightVolume lv = converged_volume(mesh, opt, s, tf, {light});
   const double err = max_error_vs_reference(lv, 0, mesh, s, tf, light);
   std::printf("oblique slab: max |rho - reference| = %.3g\n", err);
   EXPECT_LT(err, 1e-6);
@@ -66,10 +73,7 @@ TEST(LightAccuracy, DiagonalLightAlongBoundaryFaces) {
   const Light light = directional({1, 1, 0});
   LightVolumeOptions opt;
   opt.level0_resolution = 17;
-  LightVolume lv(mesh, opt);
-  lv.set_field(s, tf);
-  lv.set_lights({light});
-  EXPECT_TRUE(lv.update().converged);
+  const LightVolume lv = converged_volume(mesh, opt, s, tf, {light});
   // The ray from x back towards the light leaves the block through x = 0 or y = 0.
   const double err = max_error_vs(lv.light_rho(0), *mesh,
                                   [](const Vec3d& x) { return std::exp(-1.2 * std::sqrt(2.0) * std::min(x.x, x.y)); });
@@ -137,11 +141,7 @@ TEST(LightAccuracy, BoxOccluderCastsShadow) {
   LightVolumeOptions opt;
   opt.level0_resolution = 32;
   opt.occluders = {Bounds{{0.35, 0.35, 0.2}, {0.65, 0.65, 0.4}}};
-  LightVolume lv(mesh, opt);
-  lv.set_field(s, tf);
-  const Light light = directional({0, 0, 1});
-  lv.set_lights({light});
-  EXPECT_TRUE(lv.update().converged);
+  const LightVolume lv = converged_volume(mesh, opt, s, tf, {directional({0, 0, 1})});
   int shadowed = 0, lit = 0;
   for (std::size_t p = 0; p < mesh->points.size(); ++p) {
     const Vec3d& x = mesh->points[p];
@@ -174,11 +174,8 @@ TEST(LightAccuracy, LightCrossesHole) {
   const auto s = field(*mesh, [](const Vec3d&) { return 0.0; });
   LightVolumeOptions opt;
   opt.level0_resolution = 33;
-  LightVolume lv(mesh, opt);
-  lv.set_field(s, tf);
   const Light light = directional({1, 0, 0});
-  lv.set_lights({light});
-  EXPECT_TRUE(lv.update().converged);
+  const LightVolume lv = converged_volume(mesh, opt, s, tf, {light});
   int behind = 0;
   const auto used = used_points(*mesh);
   for (std::size_t p = 0; p < mesh->points.size(); ++p) {
@@ -217,10 +214,7 @@ TEST(LightAccuracy, PointLightInsideCell) {
   const Vec3d P{0.437, 0.512, 0.463};
   LightVolumeOptions opt;
   opt.level0_resolution = 24;
-  LightVolume lv(mesh, opt);
-  lv.set_field(s, tf);
-  lv.set_lights({point_light(P)});
-  EXPECT_TRUE(lv.update().converged);
+  const LightVolume lv = converged_volume(mesh, opt, s, tf, {point_light(P)});
   const double worst = max_error_vs(lv.light_rho(0), *mesh, [&](const Vec3d& x) { return std::exp(-length(x - P)); });
   std::printf("point light: max |rho - exp(-r)| = %.3g\n", worst);
   EXPECT_LT(worst, 1e-5);
