@@ -236,7 +236,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     };
     int piece_hint = -1;
     double s_in = 0, t_in = 0;
-    for (std::size_t i = 0; i < walk.crossings.size(); ++i) {
+    for (std::size_t i = 0; i < walk.count; ++i) {
       const double s_out = scalar_at(walk.crossings[i]), t_out = walk.crossings[i].t;
       if (i > 0) p.tr.depth += ctx.field.table.integral(s_in, s_out, t_out - t_in, &piece_hint);
       s_in = s_out;
@@ -253,15 +253,30 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       p.tr.depth += ctx.field.table.integral(s_in, s_end, p.len - t_in, &piece_hint);
     }
   };
-  auto keep_walk = [&](const Trace& tr, const std::vector<WalkCrossing>& walked, RecordedWalk& walk) {
-    walk.crossings.assign(walked.begin(), walked.end());
+  // Whether a walk is kept for the next passes (`keep`: walks are recorded at all), and whether
+  // its crossings need a new span of the arena.
+  auto worth_keeping = [](const Trace& tr) { return tr.kind != Trace::Kind::lost; };
+  auto needs_span = [&](const Trace& tr, const std::vector<WalkCrossing>& walked, const RecordedWalk& walk) {
+    return worth_keeping(tr) && walked.size() > walk.capacity;
+  };
+  // `span`: where the crossings go if the walk's own span is too small (advanced past them).
+  auto keep_walk = [&](const Trace& tr, const std::vector<WalkCrossing>& walked, RecordedWalk& walk, bool keep,
+                       WalkCrossing*& span) {
     walk.tet = tr.tet;
     walk.kind = static_cast<std::uint8_t>(tr.kind);
     walk.end = static_cast<float>(tr.end);
     for (int k = 0; k < 4; ++k) walk.weights[k] = tr.weights[k];
     walk.has_path = false;
-    walk.valid = tr.kind != Trace::Kind::lost;
-    if (!walk.valid) walk.crossings = {};
+    walk.valid = keep && worth_keeping(tr);
+    walk.count = 0;
+    if (!walk.valid) return;
+    if (needs_span(tr, walked, walk)) {
+      walk.crossings = span;
+      walk.capacity = static_cast<std::uint32_t>(walked.size());
+      span += walked.size();
+    }
+    std::copy(walked.begin(), walked.end(), walk.crossings);
+    walk.count = static_cast<std::uint32_t>(walked.size());
   };
   // The new value of a vertex from its trace.
   auto end_update = [&](Pending& p, RecordedWalk& walk) -> float {
@@ -362,9 +377,15 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       job_of.push_back(j);
     }
     walk_batch(walk_input, jobs.data(), jobs.size());
+    // One span of the arena for every walk here that does not fit its own.
+    std::size_t need = 0;
+    if (keep)
+      for (std::size_t k = 0; k < jobs.size(); ++k)
+        if (needs_span(jobs[k].trace, walked[k], walk_of(job_of[k]))) need += walked[k].size();
+    WalkCrossing* span = need > 0 ? state.crossings.allocate(need) : nullptr;
     for (std::size_t k = 0; k < jobs.size(); ++k) {
       pending[job_of[k]].tr = jobs[k].trace;
-      keep_walk(jobs[k].trace, walked[k], walk_of(job_of[k]));
+      keep_walk(jobs[k].trace, walked[k], walk_of(job_of[k]), keep, span);
     }
     for (std::size_t j = 0; j < pending.size(); ++j)
       state.next[static_cast<std::size_t>(pending[j].v)] = end_update(pending[j], walk_of(j));

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "crossing_arena.h"
 #include "level0_grid.h"
 #include "level1_mesh.h"
 #include "level1_walk.h"
@@ -80,7 +81,10 @@ struct VertexOrder {
 /// and path length depend on the geometry only, so a new field (the next in-situ time step)
 /// re-integrates the extinction between the recorded crossings instead of walking again.
 struct RecordedWalk {
-  std::vector<WalkCrossing> crossings;
+  /// `count` crossings in the light's CrossingArena (PassState::crossings); a span of `capacity`
+  /// is this walk's until the arena is reset, and a walk recorded again reuses it if it fits.
+  WalkCrossing* crossings = nullptr;
+  std::uint32_t count = 0, capacity = 0;
   std::int32_t tet = -1;  ///< Trace::tet
   float end = 0;          ///< Trace::end
   float weights[4] = {0, 0, 0, 0};  ///< Trace::weights
@@ -95,6 +99,7 @@ struct RecordedWalk {
 struct PassState {
   std::vector<std::int32_t> start_tet;  ///< per vertex, see walk_to_light; kept across clear()
   std::vector<RecordedWalk> walks;      ///< per vertex; kept across clear(), like start_tet
+  CrossingArena crossings;              ///< the walks' crossings
   /// Per vertex, the corners of its departure tet (4 ids; -1: its value came from level 0 or the
   /// light): the passes after the first check them for changes in pass order, without loading
   /// the tets. Empty after clear(): the next pass is full.
@@ -123,10 +128,18 @@ struct PassState {
   /// (their storage kept when already sized).
   void prepare_walks(std::size_t np, bool record) {
     if (start_tet.size() != np) start_tet.assign(np, -1);
-    if (!record)
+    if (!record) {
       walks = {};
-    else if (walks.size() != np)
+      crossings = {};
+    } else if (walks.size() != np) {
       walks.assign(np, RecordedWalk{});
+      crossings.reset();
+    }
+  }
+  /// Every recorded walk invalid (the light moved): their crossings' storage serves the next.
+  void forget_walks() {
+    for (RecordedWalk& w : walks) w = RecordedWalk{};
+    crossings.reset();
   }
 };
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step);

@@ -88,9 +88,7 @@ struct LightVolume::Impl {
     void forget_direction() {
       order_valid = false;
       pass_state.start_tet.clear();
-      // The records are kept, only invalidated: their lists' storage serves the next walks, so
-      // a moved light's first pass does not free and allocate a list per vertex again.
-      for (auto& w : pass_state.walks) w.valid = false;
+      pass_state.forget_walks();
     }
   };
 

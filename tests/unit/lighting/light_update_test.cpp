@@ -199,6 +199,35 @@ TEST(LightUpdate, SameFieldSameLightWhateverCameBefore) {
   }
 }
 
+TEST(LightUpdate, WalksRecordedAfterALightMoveReplayCorrectly) {
+  // A moved light records its walks again into storage its old walks used; the next field
+  // replays them. Any walk left pointing at storage another walk took would read its crossings.
+  const auto mesh = prepare(fixtures::tet_block_with_hole(8));
+  LightVolumeOptions opt;
+  opt.level0_resolution = 16;
+  const auto first = field(*mesh, [](const Vec3d& p) { return 0.2 + 0.3 * p.x; });
+  const auto second = field(*mesh, [](const Vec3d& p) { return 0.9 - 0.4 * p.y + 0.1 * std::sin(7 * p.z); });
+  const std::vector<Light> before{directional({1, 0.3, 0.2}), point_light({0.45, 0.5, 1.6})};
+  const std::vector<Light> after{directional({0.2, 1, -0.3}), point_light({-0.6, 0.4, 0.5})};
+  LightVolume warm(mesh, opt), fresh(mesh, opt);
+  warm.set_lights(before);
+  warm.set_field(first, ramp_tf(2.5));
+  ASSERT_TRUE(warm.update().converged);
+  warm.set_lights(after);
+  ASSERT_TRUE(warm.update().converged);
+  warm.set_field(second, ramp_tf(2.5));
+  ASSERT_TRUE(warm.update().converged);
+  fresh.set_lights(after);
+  fresh.set_field(second, ramp_tf(2.5));
+  ASSERT_TRUE(fresh.update().converged);
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    double worst = 0;
+    for (std::size_t p = 0; p < mesh->points.size(); ++p)
+      worst = std::max(worst, std::fabs(static_cast<double>(warm.light_rho(k)[p]) - fresh.light_rho(k)[p]));
+    EXPECT_LT(worst, 2e-4) << "light " << k;
+  }
+}
+
 TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
   const auto mesh = prepare(fixtures::tet_block_with_hole(8));
   LightVolumeOptions opt;
