@@ -68,7 +68,8 @@
 // full pass's set-up, one batch, the scattering's set-up and one block of a scattering iteration
 // (a few ms at 1M tets). A piece starts only if its last duration, plus the copy of the results
 // that ends the call, still fits, except the first of a call, so every call makes progress and
-// overruns are small. After a level-1 piece only the points it changed are combined and copied
+// overruns are small. (The CPU scattering's set-up is timed at construction when sigma_s is set,
+// so the call that ends the level-1 passes can start the scattering too.) After a level-1 piece only the points it changed are combined and copied
 // out. A changed light is warm-started from its previous level-1
 // solution, corrected by the change of its level-0 solution; the scattering from its previous
 // solution plus the change of its source. A light that did not move keeps its vertex order and
