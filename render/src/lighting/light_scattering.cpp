@@ -33,31 +33,51 @@ std::vector<float> scatter_weights(const TetMesh& mesh, const Level1Topology& to
 }
 
 ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& weights) {
+  constexpr std::size_t C = kScatterSlice;
   ScatterPlan plan;
   const std::size_t np = topology.edge_offsets.size() - 1;
+  auto degree = [&](std::int32_t p) {
+    return topology.edge_offsets[static_cast<std::size_t>(p) + 1] - topology.edge_offsets[static_cast<std::size_t>(p)];
+  };
   plan.order = detail::morton_point_order(mesh);
+  for (std::size_t b = 0; b < np; b += ScatterPlan::kDegreeWindow)
+    std::stable_sort(plan.order.begin() + static_cast<std::ptrdiff_t>(b),
+                     plan.order.begin() + static_cast<std::ptrdiff_t>(std::min(np, b + ScatterPlan::kDegreeWindow)),
+                     [&](std::int32_t a, std::int32_t c) { return degree(a) > degree(c); });
   std::vector<std::int32_t> position(np);
   for (std::size_t k = 0; k < np; ++k) position[static_cast<std::size_t>(plan.order[k])] = static_cast<std::int32_t>(k);
-  const std::size_t chunk = (np + kScatterChunks - 1) / kScatterChunks;
+  const std::size_t chunk = (np + kScatterChunks * C - 1) / (kScatterChunks * C) * C;
   plan.chunk_begin.resize(kScatterChunks + 1);
   for (std::size_t c = 0; c <= kScatterChunks; ++c) plan.chunk_begin[c] = std::min(np, c * chunk);
-  plan.edge_offsets.resize(np + 1);
-  plan.edge_offsets[0] = 0;
-  for (std::size_t k = 0; k < np; ++k) {
-    const auto p = static_cast<std::size_t>(plan.order[k]);
-    plan.edge_offsets[k + 1] = plan.edge_offsets[k] + (topology.edge_offsets[p + 1] - topology.edge_offsets[p]);
+  const std::size_t slices = (np + C - 1) / C;
+  plan.slice_begin.assign(slices + 1, 0);
+  for (std::size_t s = 0; s < slices; ++s) {
+    std::int64_t columns = 0;
+    for (std::size_t k = s * C; k < std::min(np, (s + 1) * C); ++k) columns = std::max(columns, degree(plan.order[k]));
+    plan.slice_begin[s + 1] = plan.slice_begin[s] + columns * static_cast<std::int64_t>(C);
   }
-  plan.edge_ids.resize(topology.edge_ids.size());
-  plan.weights.resize(weights.size());
+  const auto entries = static_cast<std::size_t>(plan.slice_begin[slices]);
+  plan.ids.resize(entries);
+  plan.weights.resize(entries);
   plan.weight_sums.assign(np, 0.0f);
-  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) {
-      const auto p = static_cast<std::size_t>(plan.order[k]);
-      auto out = static_cast<std::size_t>(plan.edge_offsets[k]);
-      for (auto s = topology.edge_offsets[p]; s < topology.edge_offsets[p + 1]; ++s, ++out) {
-        plan.edge_ids[out] = position[static_cast<std::size_t>(topology.edge_ids[static_cast<std::size_t>(s)])];
-        plan.weights[out] = weights[static_cast<std::size_t>(s)];
-        plan.weight_sums[k] += plan.weights[out];
+  parallel_for(slices, 256, [&](std::size_t b, std::size_t e) {
+    for (std::size_t s = b; s < e; ++s) {
+      const auto first = static_cast<std::size_t>(plan.slice_begin[s]);
+      const std::size_t columns = (static_cast<std::size_t>(plan.slice_begin[s + 1]) - first) / C;
+      for (std::size_t i = 0; i < C; ++i) {
+        const std::size_t k = s * C + i;
+        // Padding reads a value that exists and is finite: the position's own, or position 0
+        // past the last point.
+        const std::int32_t own = k < np ? static_cast<std::int32_t>(k) : 0;
+        const std::size_t p = k < np ? static_cast<std::size_t>(plan.order[k]) : 0;
+        const auto e0 = k < np ? static_cast<std::size_t>(topology.edge_offsets[p]) : 0;
+        const auto n = k < np ? static_cast<std::size_t>(topology.edge_offsets[p + 1]) - e0 : 0;
+        for (std::size_t col = 0; col < columns; ++col) {
+          const std::size_t at = first + col * C + i;
+          plan.ids[at] = col < n ? position[static_cast<std::size_t>(topology.edge_ids[e0 + col])] : own;
+          plan.weights[at] = col < n ? weights[e0 + col] : 0.0f;
+          if (k < np) plan.weight_sums[k] += plan.weights[at];
+        }
       }
     }
   });
@@ -116,14 +136,17 @@ void scatter_prepare(const ScatterPlan& plan, const std::vector<float>& pre, std
   });
   solve.masked = std::find(any.begin(), any.end(), 1) != any.end();
   if (solve.masked) {
+    constexpr std::size_t C = kScatterSlice;
     solve.masked_weights = plan.weights;
     solve.masked_sums.assign(np, 0.0f);
-    parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-      for (std::size_t p = b; p < e; ++p)
-        for (auto s = plan.edge_offsets[p]; s < plan.edge_offsets[p + 1]; ++s) {
-          float& w = solve.masked_weights[static_cast<std::size_t>(s)];
-          if (!solve.finite[static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(s)])]) w = 0.0f;
-          solve.masked_sums[p] += w;
+    parallel_for(plan.slices(), 256, [&](std::size_t b, std::size_t e) {
+      for (std::size_t s = b; s < e; ++s)
+        for (auto at = static_cast<std::size_t>(plan.slice_begin[s]); at < static_cast<std::size_t>(plan.slice_begin[s + 1]);
+             ++at) {
+          float& w = solve.masked_weights[at];
+          if (!solve.finite[static_cast<std::size_t>(plan.ids[at])]) w = 0.0f;
+          const std::size_t k = s * C + at % C;
+          if (k < np) solve.masked_sums[k] += w;
         }
     });
   } else {
@@ -149,50 +172,58 @@ bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& p
   const std::size_t last = std::min(kScatterChunks, first + std::max<std::size_t>(chunks, 1));
   const std::vector<std::uint8_t>& finite = solve.finite;
   const float* weights = solve.masked ? solve.masked_weights.data() : plan.weights.data();
-  const float* sums = solve.masked ? solve.masked_sums.data() : plan.weight_sums.data();
+  const float* sums_of = solve.masked ? solve.masked_sums.data() : plan.weight_sums.data();
   const bool plain = solve.iterations == 0;  // L_1 = J(L_0): L_{-1} does not exist
   const Colour omega = {static_cast<float>(solve.omega[0]), static_cast<float>(solve.omega[1]),
                         static_cast<float>(solve.omega[2]), 0.0f};
   const Colour s = {static_cast<float>(sigma_s[0]), static_cast<float>(sigma_s[1]), static_cast<float>(sigma_s[2]), 0.0f};
   const Colour one = {1, 1, 1, 1};
   std::vector<double> residuals(last - first, 0.0);
+  constexpr std::size_t C = kScatterSlice;
   parallel_for(last - first, 1, [&](std::size_t c0, std::size_t c1) {
     for (std::size_t c = first + c0; c < first + c1; ++c) {
       const std::size_t begin = plan.chunk_begin[c], end = plan.chunk_begin[c + 1];
       float residual = 0.0f;
-      for (std::size_t p = begin; p < end; ++p) {
-        Colour sum = {0, 0, 0, 0};
-        for (auto e = plan.edge_offsets[p]; e < plan.edge_offsets[p + 1]; ++e) {
-          Colour v;
-          std::memcpy(&v, current.data() + S * static_cast<std::size_t>(plan.edge_ids[static_cast<std::size_t>(e)]), sizeof v);
-          sum += weights[static_cast<std::size_t>(e)] * v;
-        }
-        const float wsum = sums[p];
-        Colour jacobi, next;
-        if (finite[p]) {
-          // (L0 + s sum w L) / (1 + s sum w); with s = 0 or no neighbours the source itself.
-          Colour source;
-          std::memcpy(&source, pre.data() + S * p, sizeof source);
-          jacobi = (source + s * sum) / (one + s * wsum);
-          next = jacobi;
-          if (!plain) {
-            Colour before;
-            std::memcpy(&before, solve.other.data() + S * p, sizeof before);
-            next = before + omega * (jacobi - before);
+      for (std::size_t slice = begin / C; slice * C < end; ++slice) {
+        // The slice's neighbour sums, a column at a time.
+        Colour sums[C];
+        for (Colour& sum : sums) sum = Colour{0, 0, 0, 0};
+        const auto entry_end = static_cast<std::size_t>(plan.slice_begin[slice + 1]);
+        for (auto at = static_cast<std::size_t>(plan.slice_begin[slice]); at < entry_end; at += C)
+          for (std::size_t i = 0; i < C; ++i) {
+            Colour v;
+            std::memcpy(&v, current.data() + S * static_cast<std::size_t>(plan.ids[at + i]), sizeof v);
+            sums[i] += weights[at + i] * v;
           }
-        } else {
-          // No source of its own: the weighted mean of its finite neighbours (0 without any).
-          next = wsum > 0 ? sum / wsum : Colour{0, 0, 0, 0};
+        for (std::size_t p = slice * C; p < std::min(end, (slice + 1) * C); ++p) {
+          const Colour sum = sums[p - slice * C];
+          const float wsum = sums_of[p];
+          Colour jacobi, next;
+          if (finite[p]) {
+            // (L0 + s sum w L) / (1 + s sum w); with s = 0 or no neighbours the source itself.
+            Colour source;
+            std::memcpy(&source, pre.data() + S * p, sizeof source);
+            jacobi = (source + s * sum) / (one + s * wsum);
+            next = jacobi;
+            if (!plain) {
+              Colour before;
+              std::memcpy(&before, solve.other.data() + S * p, sizeof before);
+              next = before + omega * (jacobi - before);
+            }
+          } else {
+            // No source of its own: the weighted mean of its finite neighbours (0 without any).
+            next = wsum > 0 ? sum / wsum : Colour{0, 0, 0, 0};
+          }
+          next[3] = 0.0f;
+          Colour now;
+          std::memcpy(&now, current.data() + S * p, sizeof now);
+          const Colour diff = next - now;
+          for (int ch = 0; ch < 3; ++ch) {
+            const float change = std::fabs(diff[ch]);
+            if (change > residual && change <= HUGE_VALF) residual = change;
+          }
+          std::memcpy(solve.other.data() + S * p, &next, sizeof next);
         }
-        next[3] = 0.0f;
-        Colour now;
-        std::memcpy(&now, current.data() + S * p, sizeof now);
-        const Colour diff = next - now;
-        for (int ch = 0; ch < 3; ++ch) {
-          const float change = std::fabs(diff[ch]);
-          if (change > residual && change <= HUGE_VALF) residual = change;
-        }
-        std::memcpy(solve.other.data() + S * p, &next, sizeof next);
       }
       residuals[c - first] = residual;
     }

@@ -20,18 +20,32 @@ std::vector<float> scatter_weights(const TetMesh& mesh, const Level1Topology& to
 /// depend on the thread count).
 inline constexpr std::size_t kScatterChunks = 16;
 
+/// Positions per slice: a slice's neighbour sums are gathered column by column (see ScatterPlan).
+inline constexpr std::size_t kScatterSlice = 8;
+
 /// The order a sweep works in: the points along a Morton curve of their positions, cut into
 /// kScatterChunks blocks, with the sources, the iterate and each point's edges stored in that
 /// order. A point's neighbours then mostly sit just before or after it, so what it gathers is
 /// still in cache; in the mesh's own numbering they were scattered over the arrays and the sweep
 /// waited on memory for most of its time. Positions, not point ids, index everything below.
+/// The edges are stored by slices of kScatterSlice positions: slice s has as many columns as its
+/// positions' largest neighbour count, column k holding the k-th neighbour of each position of
+/// the slice, so that a sweep runs one loop per slice over its columns instead of one loop per
+/// point of 5 to 26 neighbours (where the loop's end was mispredicted at every point: 28 % of
+/// the neighbour sums' time at 1M tets). A position with fewer neighbours has weight 0 (and its
+/// own position as id) in the columns it lacks; to keep that padding small, the points within
+/// each window of kDegreeWindow consecutive positions of the curve are sorted by their number of
+/// neighbours (3 % padding at 1M tets, against 29 % along the curve alone). Iterations at 1M
+/// tets: 2.0 -> 1.43 ms.
 struct ScatterPlan {
-  std::vector<std::int32_t> order;         ///< the point at each position
-  std::vector<std::size_t> chunk_begin;    ///< kScatterChunks + 1 positions
-  std::vector<std::int64_t> edge_offsets;  ///< edges of position k: [edge_offsets[k], edge_offsets[k+1])
-  std::vector<std::int32_t> edge_ids;      ///< neighbour positions
-  std::vector<float> weights;              ///< scatter_weights, in the same order
-  std::vector<float> weight_sums;          ///< per position: the sum of its weights (6, or 0 alone)
+  static constexpr std::size_t kDegreeWindow = 128;
+  std::vector<std::int32_t> order;        ///< the point at each position
+  std::vector<std::size_t> chunk_begin;   ///< kScatterChunks + 1 positions, multiples of kScatterSlice but the last
+  std::vector<std::int64_t> slice_begin;  ///< per slice + 1: its first entry (columns x kScatterSlice entries)
+  std::vector<std::int32_t> ids;          ///< per entry: the neighbour's position
+  std::vector<float> weights;             ///< per entry: scatter_weights (0 in padding)
+  std::vector<float> weight_sums;         ///< per position: the sum of its weights (6, or 0 alone)
+  std::size_t slices() const { return slice_begin.size() - 1; }
 };
 ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& weights);
 
