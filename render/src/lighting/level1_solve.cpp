@@ -82,37 +82,53 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
   // This runs as one piece of a frame budget, so it avoids sorting: keys and slabs by a bucket
-  // count. Within a slab the points keep their own order (any order is valid there): the light
-  // volume numbers them along a Morton curve, so consecutive walks stay in the same part of the
-  // mesh, and of memory.
+  // count, in parallel over fixed blocks of points. Within a slab the points keep their own order
+  // (any order is valid there): the light volume numbers them along a Morton curve, so
+  // consecutive walks stay in the same part of the mesh, and of memory.
   const std::size_t np = mesh.points.size();
   const Vec3d u = light.kind == Light::Kind::directional ? normalize(light.vector) : Vec3d{};
-  std::vector<double> key(np);
-  parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; ++p)
-      key[p] = light.kind == Light::Kind::directional ? dot(mesh.points[p], u) : length(mesh.points[p] - light.vector);
+  auto used = [&](std::size_t p) { return topology.tet_offsets[p] != topology.tet_offsets[p + 1]; };
+  constexpr std::size_t kBlock = 1 << 14;
+  const std::size_t blocks = (np + kBlock - 1) / kBlock;
+  std::vector<double> key(np), block_lo(blocks, HUGE_VAL), block_hi(blocks, -HUGE_VAL);
+  std::vector<std::size_t> block_used(blocks, 0);
+  VertexOrder order;
+  order.path_length.resize(np);
+  parallel_for(blocks, 1, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b) {
+      // Kept in locals: the threads' entries of block_lo etc. share cache lines.
+      double lo = HUGE_VAL, hi = -HUGE_VAL;
+      std::size_t n = 0;
+      for (std::size_t p = b * kBlock; p < std::min(np, (b + 1) * kBlock); ++p) {
+        key[p] = light.kind == Light::Kind::directional ? dot(mesh.points[p], u) : length(mesh.points[p] - light.vector);
+        order.path_length[p] = box_path_length(mesh.bounds, mesh.points[p], light);
+        if (!used(p)) continue;
+        ++n;
+        lo = std::min(lo, key[p]);
+        hi = std::max(hi, key[p]);
+      }
+      block_lo[b] = lo;
+      block_hi[b] = hi;
+      block_used[b] = n;
+    }
   });
   // Groups are the slabs [k0 + g h / 2, k0 + (g + 1) h / 2) of the key (k0 its smallest value),
   // so a bucket count replaces a sort of all points.
-  std::vector<std::int32_t> used;
-  used.reserve(np);
-  double k0 = HUGE_VAL, k1 = -HUGE_VAL;
-  for (std::size_t p = 0; p < np; ++p)
-    if (topology.tet_offsets[p] != topology.tet_offsets[p + 1]) {
-      used.push_back(static_cast<std::int32_t>(p));
-      k0 = std::min(k0, key[p]);
-      k1 = std::max(k1, key[p]);
-    }
-  VertexOrder order;
+  const double k0 = *std::min_element(block_lo.begin(), block_lo.end());
+  const double k1 = *std::max_element(block_hi.begin(), block_hi.end());
+  std::size_t total = 0;
+  for (std::size_t n : block_used) total += n;
   order.group_of.assign(np, -1);
-  if (used.empty()) return order;
+  if (total == 0) return order;
   const double width = 0.5 * step;
   const auto slab_of = [&](std::size_t p) { return static_cast<std::size_t>(std::floor((key[p] - k0) / width)); };
   const double span = (k1 - k0) / width;
-  order.vertices.resize(used.size());
-  if (!(span < 2.0 * static_cast<double>(used.size()))) {
+  order.vertices.resize(total);
+  if (!(span < 2.0 * static_cast<double>(total))) {
     // Steps far below the point spacing (a user's choice): more slabs than points, so sort.
-    order.vertices = used;
+    order.vertices.clear();
+    for (std::size_t p = 0; p < np; ++p)
+      if (used(p)) order.vertices.push_back(static_cast<std::int32_t>(p));
     std::sort(order.vertices.begin(), order.vertices.end(), [&](std::int32_t a, std::int32_t b) {
       const std::size_t sa = slab_of(static_cast<std::size_t>(a)), sb = slab_of(static_cast<std::size_t>(b));
       return sa != sb ? sa < sb : a < b;
@@ -121,21 +137,48 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
       if (i + 1 == order.vertices.size() || slab_of(static_cast<std::size_t>(order.vertices[i])) !=
                                                 slab_of(static_cast<std::size_t>(order.vertices[i + 1])))
         order.group_end.push_back(i + 1);
-  } else {
-    std::vector<std::size_t> start(static_cast<std::size_t>(span) + 2, 0);
-    for (std::int32_t p : used) ++start[slab_of(static_cast<std::size_t>(p)) + 1];
-    for (std::size_t g = 1; g < start.size(); ++g) start[g] += start[g - 1];
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::int32_t p : used) order.vertices[fill[slab_of(static_cast<std::size_t>(p))]++] = p;
-    for (std::size_t g = 1; g < start.size(); ++g)
-      if (start[g] > start[g - 1]) order.group_end.push_back(start[g]);
+    for (std::size_t g = 0, begin = 0; g < order.group_end.size(); begin = order.group_end[g++])
+      for (std::size_t i = begin; i < order.group_end[g]; ++i)
+        order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
+    return order;
   }
-  for (std::size_t g = 0, begin = 0; g < order.group_end.size(); begin = order.group_end[g++])
-    for (std::size_t i = begin; i < order.group_end[g]; ++i)
-      order.group_of[static_cast<std::size_t>(order.vertices[i])] = static_cast<std::int32_t>(g);
-  order.path_length.assign(np, 0.0);
-  parallel_for(np, 4096, [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; ++p) order.path_length[p] = box_path_length(mesh.bounds, mesh.points[p], light);
+  // Each block counts its points per slab; the counts, summed in (slab, block) order, give each
+  // block where its points of each slab go, so the blocks place theirs in parallel and a slab
+  // keeps the points' order. With very many slabs (a step near the point spacing) the counts
+  // would outgrow the points: one block then.
+  const std::size_t slabs = static_cast<std::size_t>(span) + 1;
+  const std::size_t parts = slabs * blocks <= 4 * np ? blocks : 1;
+  const std::size_t part_size = parts == 1 ? np : kBlock;
+  // [part][slab], so that the threads' counters never share a cache line: first position, after
+  // the scan.
+  std::vector<std::size_t> at(parts * slabs, 0);
+  parallel_for(parts, 1, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b)
+      for (std::size_t p = b * part_size; p < std::min(np, (b + 1) * part_size); ++p)
+        if (used(p)) ++at[b * slabs + slab_of(p)];
+  });
+  std::vector<std::int32_t> group_of_slab(slabs, -1);
+  std::size_t sum = 0;
+  for (std::size_t slab = 0; slab < slabs; ++slab) {
+    const std::size_t before = sum;
+    for (std::size_t b = 0; b < parts; ++b) {
+      const std::size_t n = at[b * slabs + slab];
+      at[b * slabs + slab] = sum;
+      sum += n;
+    }
+    if (sum > before) {
+      group_of_slab[slab] = static_cast<std::int32_t>(order.group_end.size());
+      order.group_end.push_back(sum);
+    }
+  }
+  parallel_for(parts, 1, [&](std::size_t b0, std::size_t b1) {
+    for (std::size_t b = b0; b < b1; ++b)
+      for (std::size_t p = b * part_size; p < std::min(np, (b + 1) * part_size); ++p)
+        if (used(p)) {
+          const std::size_t slab = slab_of(p);
+          order.vertices[at[b * slabs + slab]++] = static_cast<std::int32_t>(p);
+          order.group_of[p] = group_of_slab[slab];
+        }
   });
   return order;
 }

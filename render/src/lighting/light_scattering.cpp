@@ -124,15 +124,18 @@ void scatter_prepare(const ScatterPlan& plan, const std::vector<float>& pre, std
   solve.finite.resize(np);
   std::vector<std::uint8_t> any(kScatterChunks, 0);
   parallel_for(kScatterChunks, 1, [&](std::size_t c0, std::size_t c1) {
-    for (std::size_t c = c0; c < c1; ++c)
+    for (std::size_t c = c0; c < c1; ++c) {
+      bool some = false;  // a local: the threads' entries of `any` share a cache line
       for (std::size_t p = plan.chunk_begin[c]; p < plan.chunk_begin[c + 1]; ++p) {
         solve.finite[p] = std::isfinite(pre[S * p] + pre[S * p + 1] + pre[S * p + 2]);
-        any[c] |= !solve.finite[p];
+        some = some || !solve.finite[p];
         // A weight of 0 does not remove a NaN (0 * NaN is NaN): a start value that is not
         // finite is replaced by the source, or 0 where that is not finite either.
         for (std::size_t ch = 0; ch < 3; ++ch)
           if (!std::isfinite(current[S * p + ch])) current[S * p + ch] = solve.finite[p] ? pre[S * p + ch] : 0.0f;
       }
+      any[c] = some;
+    }
   });
   solve.masked = std::find(any.begin(), any.end(), 1) != any.end();
   if (solve.masked) {

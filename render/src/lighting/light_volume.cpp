@@ -192,11 +192,13 @@ struct LightVolume::Impl {
       l.rho1 = at_vertex;
     } else {
       // Warm start: keep the previous level-1 detail, scaled by how level 0 changed.
-      for (std::size_t p = 0; p < np; ++p) {
-        const double before = l.rho0_vertex[p];
-        const double v = before > 1e-6 ? l.rho1[p] * (at_vertex[p] / before) : at_vertex[p];
-        l.rho1[p] = static_cast<float>(std::clamp(v, 0.0, 1.0));
-      }
+      parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
+        for (std::size_t p = b; p < e; ++p) {
+          const double before = l.rho0_vertex[p];
+          const double v = before > 1e-6 ? l.rho1[p] * (at_vertex[p] / before) : at_vertex[p];
+          l.rho1[p] = static_cast<float>(std::clamp(v, 0.0, 1.0));
+        }
+      });
     }
     l.rho0 = std::move(rho0);
     l.rho0_vertex = std::move(at_vertex);

@@ -37,6 +37,7 @@ void expect_slab_order(const TetMesh& mesh, const Light& light, double step) {
     EXPECT_GT(s, previous) << "group " << g;
     for (std::size_t i = begin; i < end; ++i) {
       EXPECT_EQ(slab(order.vertices[i]), s) << "group " << g;
+      if (i > begin) EXPECT_LT(order.vertices[i - 1], order.vertices[i]) << "group " << g << ": points keep their order";
       EXPECT_EQ(order.group_of[static_cast<std::size_t>(order.vertices[i])], static_cast<std::int32_t>(g));
     }
     previous = s;
@@ -52,6 +53,16 @@ TEST(VertexOrder, GroupsAreSlabsAlongTheLight) {
   expect_slab_order(*mesh, directional({-1, 0.3, 0.2}), 0.15);  // few ties
   expect_slab_order(*mesh, point_light({0.05, 2.0, -0.3}), 0.3);
   expect_slab_order(*mesh, directional({0.2, 1, 0.1}), 1e-4);   // more slabs than points: sorted
+}
+
+TEST(VertexOrder, PointsCountedInBlocksKeepTheSameOrder) {
+  // 35 937 points: three blocks of the parallel count.
+  const auto mesh = tet_block(32, 32, 32, {-1, -1, -1}, {1, 1, 1});
+  expect_slab_order(*mesh, directional({-1, 0.3, 0.2}), 0.15);
+  expect_slab_order(*mesh, point_light({0.05, 2.0, -0.3}), 0.05);
+  // About 56 000 slabs: fewer than twice the points (still counted), but too many to count per
+  // block.
+  expect_slab_order(*mesh, directional({-1, 0.3, 0.2}), 1e-4);
 }
 
 }  // namespace
