@@ -376,20 +376,26 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     const std::uint64_t c = b / kChunk;
     std::vector<double> sum(e - b, 0.0);
+    // Locals, stored once: the threads' entries of cmin, cmax and bad share cache lines.
+    float lo = cmin[c], hi = cmax[c];
+    std::uint64_t first_bad = bad[c];
     for (std::uint32_t t = 0; t < n; ++t) {
       const float* row = steps + std::uint64_t(t) * N;
       const double weight = t + 1 == n ? double(W - n + 1) : 1.0;
       for (std::size_t v = b; v < e; ++v) {
         const float x = row[v];
         if (!std::isfinite(x)) {
-          bad[c] = std::min<std::uint64_t>(bad[c], std::uint64_t(t) * N + v);
+          first_bad = std::min<std::uint64_t>(first_bad, std::uint64_t(t) * N + v);
           continue;
         }
-        cmin[c] = std::min(cmin[c], x);
-        cmax[c] = std::max(cmax[c], x);
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
         sum[v - b] += weight * x;
       }
     }
+    cmin[c] = lo;
+    cmax[c] = hi;
+    bad[c] = first_bad;
     for (std::size_t v = b; v < e; ++v) mean[v] = sum[v - b] / W;
   });
   const std::uint64_t first_bad = *std::min_element(bad.begin(), bad.end());
