@@ -25,6 +25,10 @@ using detail::WalkTet;
 // noise is retried with them snapped to 0 (walk_turned), where the tie rule decides.
 constexpr double kSnap = 1e-12;
 
+// A start cache value at or below this is a hint: record kFirstHint - value, the start for the
+// light's previous direction (see walk_to_light).
+constexpr std::int32_t kFirstHint = -3;
+
 // A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
 // a degenerate configuration (it then falls back to level 0 and is counted).
 constexpr int kMaxMoves = 200000;
@@ -130,16 +134,15 @@ public:
       m_tr.kind = Trace::Kind::left_mesh;
       return false;
     }
-    if (cache && *cache >= 0) {
-      m_slot = *cache >> 2;
-      m_k = *cache & 3;
+    if (cache && (*cache >= 0 || *cache <= kFirstHint)) {
+      const std::int32_t record = *cache >= 0 ? *cache : kFirstHint - *cache;
+      m_slot = record >> 2;
+      m_k = record & 3;
       __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_slot)]);
-      m_phase = Phase::cached;
+      m_phase = *cache >= 0 ? Phase::cached : Phase::hinted;
       return true;
     }
-    __builtin_prefetch(&m_in.star_offsets[static_cast<std::size_t>(m_v)]);
-    m_rays.prefetch(m_v);
-    m_phase = Phase::offsets;
+    search_star();
     return true;
   }
 
@@ -177,6 +180,21 @@ public:
         __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_slot)]);
         m_phase = Phase::enter;
         return true;
+      case Phase::hinted: {
+        // The start for a nearby direction: most often still the start.
+        const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
+        const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
+        if (leaves_through(face)) {
+          *m_cache = m_slot << 2 | m_k;
+          m_phase = Phase::enter;
+        } else {
+          // Not it: the search decides, grazes included.
+          m_grazed = false;
+          m_slot = m_k = -1;
+          search_star();
+        }
+        return true;
+      }
       case Phase::cached: {
         const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
         const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
@@ -322,9 +340,16 @@ private:
     m_tr.end = m_length;
   }
 
-  // offsets -> star -> scan (a start to search for) or cached (a known one) -> enter, then
-  // peek -> step for every tet.
-  enum class Phase { offsets, star, scan, cached, enter, peek, step };
+  // The search among the star's faces begins: its offsets are fetched.
+  void search_star() {
+    __builtin_prefetch(&m_in.star_offsets[static_cast<std::size_t>(m_v)]);
+    m_rays.prefetch(m_v);
+    m_phase = Phase::offsets;
+  }
+
+  // offsets -> star -> scan (a start to search for), cached (a known one) or hinted (tried, then
+  // searched for if it is not the start) -> enter, then peek -> step for every tet.
+  enum class Phase { offsets, star, scan, cached, hinted, enter, peek, step };
 
   const WalkInput& m_in;
   Rays m_rays;

@@ -85,10 +85,11 @@ struct LightVolume::Impl {
     // change (initial values, warm start).
     std::shared_ptr<lighting::GpuLightBuffers> gpu;
     bool gpu_rho1_stale = true;
-    // The light moved (or the step changed): its vertex order and start tets are stale.
+    // The light moved (or the step changed): its vertex order and walks are stale, and each
+    // vertex's start tet becomes a hint for the next walk.
     void forget_direction() {
       order_valid = false;
-      pass_state.start_tet.clear();
+      for (std::int32_t& start : pass_state.start_tet) start = lighting::hint_start(start);
       pass_state.forget_walks();
     }
   };

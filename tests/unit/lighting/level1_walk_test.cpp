@@ -83,6 +83,61 @@ TEST(Level1Walk, BatchEqualsSingleWalks) {
   }
 }
 
+// A start found for one direction, kept as a hint (hint_start) when the light turns, gives the
+// walk for the new direction exactly what a search from scratch gives, start cache included:
+// where the hint is still the start (a small turn: most vertices) and where it is not (a large
+// one), directional and point lights, and from an axis-aligned light (its starts were chosen by
+// the tie rule, and a slight tilt moves them: no hint holds).
+TEST(Level1Walk, HintedStartsEqualSearchedStarts) {
+  const auto mesh = prepare(fixtures::tet_block_with_hole(9));
+  WalkScene sc(mesh, field(*mesh, [](const Vec3d& p) { return 0.3 + 0.6 * p.x * p.y + 0.2 * std::sin(5 * p.z); }),
+               ramp_tf(2.0));
+  struct Turn {
+    Vec3d from, to;  // directions (towards the light), or point lights' positions
+    bool point;
+    int kept_half;  // +1: most hints still hold; -1: most do not; 0: either
+  };
+  const std::vector<Turn> turns{
+      {normalize(Vec3d{-0.8, 0.45, 0.4}), normalize(Vec3d{-0.78, 0.49, 0.39}), false, 1},
+      {normalize(Vec3d{-0.8, 0.45, 0.4}), normalize(Vec3d{0.3, 0.9, -0.3}), false, -1},
+      {Vec3d{-1, 0, 0}, normalize(Vec3d{-1, 0.05, 0.03}), false, 0},
+      {Vec3d{0.5, 1.7, 0.45}, Vec3d{0.55, 1.68, 0.5}, true, 1},
+  };
+  const std::size_t np = sc.mesh->points.size();
+  for (std::size_t t = 0; t < turns.size(); ++t) {
+    const Turn& turn = turns[t];
+    auto ray = [&](std::size_t p, const Vec3d& towards) {
+      return turn.point ? normalize(towards - sc.mesh->points[p]) : towards;
+    };
+    std::vector<std::int32_t> hinted(np, -1), searched(np, -1);
+    const WalkInput before = sc.input(turn.point ? nullptr : &turn.from);
+    for (std::size_t p = 0; p < np; ++p)
+      (void)render::lighting::walk_to_light(before, static_cast<std::int32_t>(p), sc.mesh->points[p], ray(p, turn.from),
+                                            0.35, &hinted[p]);
+    std::vector<std::int32_t> old_start = hinted;
+    for (std::int32_t& start : hinted) start = render::lighting::hint_start(start);
+    const WalkInput after = sc.input(turn.point ? nullptr : &turn.to);
+    int kept = 0, hints = 0;
+    for (std::size_t p = 0; p < np; ++p) {
+      const auto v = static_cast<std::int32_t>(p);
+      const Vec3d& x = sc.mesh->points[p];
+      std::vector<WalkCrossing> with_hint, without;
+      const Trace a = render::lighting::walk_to_light(after, v, x, ray(p, turn.to), 0.35, &hinted[p], &with_hint);
+      const Trace b = render::lighting::walk_to_light(after, v, x, ray(p, turn.to), 0.35, &searched[p], &without);
+      ASSERT_TRUE(same(a, b)) << "turn " << t << " point " << p;
+      ASSERT_EQ(hinted[p], searched[p]) << "turn " << t << " point " << p;
+      ASSERT_EQ(with_hint.size(), without.size()) << "turn " << t << " point " << p;
+      for (std::size_t k = 0; k < without.size(); ++k)
+        EXPECT_EQ(0, std::memcmp(&with_hint[k], &without[k], sizeof(WalkCrossing)));
+      hints += old_start[p] >= 0;
+      kept += old_start[p] >= 0 && old_start[p] == searched[p];
+    }
+    ASSERT_GT(hints, static_cast<int>(np / 4)) << "turn " << t;
+    if (turn.kept_half > 0) EXPECT_GT(kept, hints / 2) << "turn " << t << ": most hints should still be the start";
+    if (turn.kept_half < 0) EXPECT_LT(kept, hints / 2) << "turn " << t << ": most hints should be wrong";
+  }
+}
+
 // In a homogeneous medium the optical depth of a walk is tau times the length it ran inside the
 // mesh, whatever the direction: along grid edges and faces (where every exit is a tie), obliquely,
 // and from boundary vertices along the boundary (which the tie rule alone would push outside:
