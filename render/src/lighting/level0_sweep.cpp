@@ -57,6 +57,44 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
     }
     if (count[0] <= 0 || count[1] <= 0 || count[2] <= 0) continue;
 
+    // A directional light has no node plane in the grid: every node reads the same three
+    // neighbours, at fixed offsets, and only the rows and the first node of a row on the inflow
+    // side read outside (light 1). The same arithmetic as the general row below, in the same
+    // order (an axis of weight 0 adds 0 times a finite value), without its per-node tests, and
+    // kRowsAtOnce rows of an anti-diagonal node by node: each row is a chain of dependent
+    // updates (a node reads the one before it), and independent chains side by side overlap.
+    const std::ptrdiff_t nx = dims[0], nxy = static_cast<std::ptrdiff_t>(dims[0]) * dims[1];
+    const std::ptrdiff_t offset[3] = {-o[0], -o[1] * nx, -o[2] * nxy};
+    constexpr int kRowsAtOnce = 4;
+    auto directional_rows = [&](const int* j, const int* k, int n) {
+      std::size_t first[kRowsAtOnce];
+      bool row_outside[kRowsAtOnce];
+      for (int r = 0; r < n; ++r) {
+        row_outside[r] = (w_dir[1] != 0.0 && (j[r] - o[1] < 0 || j[r] - o[1] >= dims[1])) ||
+                         (w_dir[2] != 0.0 && (k[r] - o[2] < 0 || k[r] - o[2] >= dims[2]));
+        first[r] = grid.index(start[0], j[r], k[r]);
+      }
+      for (int ii = 0; ii < count[0]; ++ii)
+        for (int r = 0; r < n; ++r) {
+          const std::size_t id = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(first[r]) + o[0] * ii);
+          if (mask[id] == Level0Mask::occluder) {
+            rho[id] = 0.0f;
+            continue;
+          }
+          if (row_outside[r] || (ii == 0 && w_dir[0] != 0.0)) {
+            rho[id] = 1.0f;
+            continue;
+          }
+          double real = 0;
+          for (int a = 0; a < 3; ++a) {
+            // An axis of weight 0 reads the node itself (in the grid, finite) and adds 0.
+            const std::size_t nid =
+                w_dir[a] != 0.0 ? static_cast<std::size_t>(static_cast<std::ptrdiff_t>(id) + offset[a]) : id;
+            real += w_dir[a] * static_cast<double>(rho[nid]) * static_cast<double>(scratch[nid]);
+          }
+          rho[id] = static_cast<float>(flush(real * static_cast<double>(scratch[id])));
+        }
+    };
     auto row = [&](int j, int k) {
       int s[3], idx[3] = {0, j, k};
       s[1] = j == centre[1] ? 0 : o[1];
@@ -129,9 +167,17 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
       const int jj0 = std::max(0, m - count[2] + 1), jj1 = std::min(count[1] - 1, m);
       const int rows = jj1 - jj0 + 1;
       auto run = [&](std::size_t b, std::size_t e) {
-        for (std::size_t r = b; r < e; ++r) {
-          const int jj = jj0 + static_cast<int>(r);
-          row(start[1] + o[1] * jj, start[2] + o[2] * (m - jj));
+        for (std::size_t r = b; r < e;) {
+          int j[kRowsAtOnce], k[kRowsAtOnce], n = 0;
+          for (; n < kRowsAtOnce && r < e; ++n, ++r) {
+            const int jj = jj0 + static_cast<int>(r);
+            j[n] = start[1] + o[1] * jj;
+            k[n] = start[2] + o[2] * (m - jj);
+          }
+          if (point)
+            for (int q = 0; q < n; ++q) row(j[q], k[q]);
+          else
+            directional_rows(j, k, n);
         }
       };
       if (static_cast<long>(rows) * count[0] < 8192)

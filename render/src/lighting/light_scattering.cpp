@@ -85,19 +85,24 @@ ScatterPlan plan_scatter(const TetMesh& mesh, const Level1Topology& topology, co
 }
 
 void to_plan_order(const ScatterPlan& plan, const std::vector<float>& by_point, std::vector<float>& by_position) {
-  by_position.assign(kPlannedStride * plan.order.size(), 0.0f);
-  for (std::size_t k = 0; k < plan.order.size(); ++k) {
-    const auto p = static_cast<std::size_t>(plan.order[k]);
-    for (int c = 0; c < 3; ++c) by_position[kPlannedStride * k + c] = by_point[3 * p + c];
-  }
+  by_position.resize(kPlannedStride * plan.order.size());
+  parallel_for(plan.order.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const auto p = static_cast<std::size_t>(plan.order[k]);
+      for (int c = 0; c < 3; ++c) by_position[kPlannedStride * k + c] = by_point[3 * p + c];
+      by_position[kPlannedStride * k + 3] = 0.0f;
+    }
+  });
 }
 
 void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_position, std::vector<float>& by_point) {
   by_point.resize(3 * plan.order.size());
-  for (std::size_t k = 0; k < plan.order.size(); ++k) {
-    const auto p = static_cast<std::size_t>(plan.order[k]);
-    for (int c = 0; c < 3; ++c) by_point[3 * p + c] = by_position[kPlannedStride * k + c];
-  }
+  parallel_for(plan.order.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const auto p = static_cast<std::size_t>(plan.order[k]);
+      for (int c = 0; c < 3; ++c) by_point[3 * p + c] = by_position[kPlannedStride * k + c];
+    }
+  });
 }
 
 void chebyshev_weights(int k, const std::array<double, 3>& sigma_s, std::array<double, 3>& omega) {
