@@ -73,7 +73,8 @@
 // out. A changed light is warm-started from its previous level-1
 // solution, corrected by the change of its level-0 solution; the scattering from its previous
 // solution plus the change of its source. A light that did not move keeps its vertex order and
-// the tet each vertex's walk starts in.
+// the tet each vertex's walk starts in; one that moved tries that tet first (a small turn keeps
+// most of them) before searching the vertex's star.
 //
 // GPU solve (options.device set): the same model in OpenGL 4.5 compute shaders, float32. Level 0
 // is one dispatch per wavefront of nodes at equal index distance from the light's node (every
