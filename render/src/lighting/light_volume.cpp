@@ -135,9 +135,19 @@ struct LightVolume::Impl {
   double last_level0_ms = -1, last_sweep_ms = -1, last_order_ms = -1;
   lighting::ScatterSolve solve;  // the CPU iteration in progress (a frame may end inside one)
   double last_chunk_ms = -1;     // one block of a CPU iteration
-  double last_combine_ms = 0;  // combining the lights follows every level-1 call: kept out of its deadline
-  double last_full_publish_ms = 0, last_copy_back_ms = 0, last_scatter_setup_ms = -1;
-  double last_publish_ms = 0;  // copying the results to the caller's order ends every call: kept out of the budget
+  // Combining the lights follows every level-1 call, and copying the results to the caller's
+  // order ends every call: both are kept out of the budget, each by the last duration of its
+  // kind (all points, or those a level-1 piece changed; a volume's first calls combine all).
+  double last_full_combine_ms = 0, last_partial_combine_ms = 0;
+  double last_full_publish_ms = 0, last_partial_publish_ms = 0, last_copy_back_ms = 0, last_scatter_setup_ms = -1;
+  // Whether the next combine and publish take every point (see combine() and publish()).
+  bool combine_is_full() const {
+    const std::size_t n = 3 * mesh->points.size();
+    return combine_pending || !has_rgb || pre.size() != n || rgb.size() != n;
+  }
+  bool publish_is_full() const { return publish_all || combine_is_full() || rgb_out.size() != 3 * mesh->points.size(); }
+  double expected_publish_ms() const { return publish_is_full() ? last_full_publish_ms : last_partial_publish_ms; }
+  double expected_combine_ms() const { return combine_is_full() ? last_full_combine_ms : last_partial_combine_ms; }
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
 
   void build_grid() {
@@ -356,6 +366,17 @@ struct LightVolume::Impl {
     cpu_scatter_stale = true;
     solve.restart();
   }
+  // A CPU level-0 solve timed at construction (the grid has no field yet; a light along -z), so
+  // that a new volume's first call can follow its resampling with its first light's level-0
+  // piece instead of leaving the rest of that call unused.
+  void prime_level0() {
+    LightState probe;
+    probe.light = Light{Light::Kind::directional, {0, 0, -1}, {1, 1, 1}};
+    LightUpdateReport unused;
+    const auto t0 = Clock::now();
+    solve_level0(probe, unused);
+    last_level0_ms = ms_since(t0);
+  }
   // The largest finite |pre|, the scale of the scattering's tolerance.
   void update_pre_scale() {
     if (!pre_scale_stale) return;
@@ -390,6 +411,7 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.build_grid();
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
   im.rgb_out = im.rgb;
+  if (!im.gpu) im.prime_level0();
   const auto& s = im.opt.sigma_s;
   if (!im.gpu && (s[0] > 0 || s[1] > 0 || s[2] > 0)) im.prime_scatter_setup();
 }
@@ -467,7 +489,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     did_work = true;
   }
   // Room kept for what ends the call: copying the results out (see the scattering below).
-  double reserve_ms = im.last_publish_ms;
+  double reserve_ms = im.expected_publish_ms();
   // A piece of work starts only if it is expected (from its last duration) to end within the
   // time budget; the first piece of a call always starts, so every call makes progress.
   // A piece never timed yet (expected_ms < 0) starts only as the first of a call.
@@ -499,7 +521,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   const auto deadline =
       std::isfinite(budget.max_ms)
           ? t0 + std::chrono::duration_cast<Clock::duration>(
-                     std::chrono::duration<double, std::milli>(budget.max_ms - im.last_combine_ms - im.last_publish_ms))
+                     std::chrono::duration<double, std::milli>(budget.max_ms - im.expected_combine_ms() - im.expected_publish_ms()))
           : Clock::time_point::max();
   for (auto& l : im.lights)
     while (l.stage == Stage::level1) {
@@ -528,8 +550,9 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   bool combined = false;
   if (im.combine_pending || !im.combine_points.empty()) {
     const auto tc = Clock::now();
+    const bool full = im.combine_is_full();
     im.combine();
-    im.last_combine_ms = ms_since(tc);
+    (full ? im.last_full_combine_ms : im.last_partial_combine_ms) = ms_since(tc);
     combined = true;
   }
   // Scattering waits for the lights: every level-1 pass changes its source and restarts it, so
@@ -541,7 +564,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     const auto ts = Clock::now();
     // A frame that scatters ends with the iterate copied back to point order and every point
     // copied out, not only those a level-1 piece changed: the budget holds room for both.
-    reserve_ms = std::max(im.last_publish_ms, im.last_full_publish_ms) + (im.gpu ? 0.0 : im.last_copy_back_ms);
+    reserve_ms = im.last_full_publish_ms + (im.gpu ? 0.0 : im.last_copy_back_ms);
     bool gpu_ran = false, cpu_ran = false;
     while (!im.scatter_done) {
       if (!im.gpu && im.cpu_scatter_stale) {
@@ -620,8 +643,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   if (did_work || combined) {
     const auto tp = Clock::now();
     const bool full = im.publish();
-    im.last_publish_ms = ms_since(tp);
-    if (full) im.last_full_publish_ms = im.last_publish_ms;
+    (full ? im.last_full_publish_ms : im.last_partial_publish_ms) = ms_since(tp);
   }
   report.total_ms = ms_since(t0);
   return report;
