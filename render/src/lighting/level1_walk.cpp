@@ -25,10 +25,6 @@ using detail::WalkTet;
 // noise is retried with them snapped to 0 (walk_turned), where the tie rule decides.
 constexpr double kSnap = 1e-12;
 
-// A start cache value at or below this is a hint: record kFirstHint - value, the start for the
-// light's previous direction (see walk_to_light).
-constexpr std::int32_t kFirstHint = -3;
-
 // A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
 // a degenerate configuration (it then falls back to level 0 and is counted).
 constexpr int kMaxMoves = 200000;

@@ -69,15 +69,21 @@ struct WalkInput {
 /// at each crossing are interpolated over the crossed face, so the optical depth of each segment
 /// is integrated exactly.
 /// `start`, when given, caches the start for this vertex and direction (-1: unknown, -2: the ray
-/// leaves the mesh at v, >= 0: record << 2 | local index; <= -3: -3 - (record << 2 | local index),
-/// a hint, the start for another direction, tested before the search; hint_start makes one). `record`, when given, receives the
-/// walk's start and every face it crosses (the end inside a tet is given by `weights`).
+/// leaves the mesh at v, >= 0: record << 2 | local index; <= kFirstHint: a hint, kFirstHint - the
+/// start for another direction, tested before the search; hint_start makes one). `record`, when
+/// given, receives the walk's start and every face it crosses (the end inside a tet is given by
+/// `weights`).
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
                     std::int32_t* start = nullptr, std::vector<WalkCrossing>* record = nullptr);
 
+/// Start cache values at or below this are hints (see walk_to_light).
+inline constexpr std::int32_t kFirstHint = -3;
+
 /// A start cache value turned into a hint when the direction changes (a light moved a little
 /// mostly keeps each vertex's start tet; testing it first skips the search through the star).
-inline std::int32_t hint_start(std::int32_t start) { return start >= 0 ? -3 - start : start <= -3 ? start : -1; }
+inline std::int32_t hint_start(std::int32_t start) {
+  return start >= 0 ? kFirstHint - start : start <= kFirstHint ? start : -1;
+}
 
 /// One walk of a batch: walk_to_light's arguments and, after walk_batch, its result.
 struct WalkJob {
