@@ -278,10 +278,11 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       return v;
     };
     int piece_hint = -1;
-    double s_in = 0, t_in = 0;
+    // From the vertex itself (ray parameter 0), where every walk starts.
+    double s_in = scalars[static_cast<std::size_t>(p.v)], t_in = 0;
     for (std::size_t i = 0; i < walk.count; ++i) {
       const double s_out = scalar_at(walk.crossings[i]), t_out = walk.crossings[i].t;
-      if (i > 0) p.tr.depth += ctx.field.table.integral(s_in, s_out, t_out - t_in, &piece_hint);
+      p.tr.depth += ctx.field.table.integral(s_in, s_out, t_out - t_in, &piece_hint);
       s_in = s_out;
       t_in = t_out;
     }

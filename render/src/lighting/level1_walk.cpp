@@ -201,7 +201,6 @@ public:
       case Phase::enter:
         m_grazed = false;
         m_enter = {{m_v, m_v, m_v}, {1, 0, 0}, 0.0, m_rays.scalar(m_v)};
-        keep(m_enter);
         m_next = m_in.tets[static_cast<std::size_t>(m_slot)].next[m_k];
         if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
         m_phase = Phase::peek;

@@ -23,8 +23,8 @@ struct ParallelPoint {
 void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vector<float>& scalars,
                       std::vector<ParallelPoint>& out);
 
-/// A point where a recorded walk crosses a face (or starts, at its vertex: ids all v): the
-/// face's points and their weights there, and its ray parameter. The scalar there is the
+/// A point where a recorded walk crosses a face: the face's points and their weights there, and
+/// its ray parameter. (The walk's start, at its vertex with ray parameter 0, is not recorded.) The scalar there is the
 /// weighted mean of the points' scalars whatever the field, so a new field's optical depth along
 /// a recorded walk needs no per-tet records.
 struct WalkCrossing {
@@ -71,8 +71,7 @@ struct WalkInput {
 /// `start`, when given, caches the start for this vertex and direction (-1: unknown, -2: the ray
 /// leaves the mesh at v, >= 0: record << 2 | local index; <= kFirstHint: a hint, kFirstHint - the
 /// start for another direction, tested before the search; hint_start makes one). `record`, when
-/// given, receives the walk's start and every face it crosses (the end inside a tet is given by
-/// `weights`).
+/// given, receives every face the walk crosses (the end inside a tet is given by `weights`).
 Trace walk_to_light(const WalkInput& in, std::int32_t v, const Vec3d& x, const Vec3d& d, double length,
                     std::int32_t* start = nullptr, std::vector<WalkCrossing>* record = nullptr);
 

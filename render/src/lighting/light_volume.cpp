@@ -21,7 +21,7 @@ namespace penumbra::render {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-// A recorded level-1 walk (PassState::walks) per point: the 56-byte record and about 9 crossings of 28 B
+// A recorded level-1 walk (PassState::walks) per point: the 56-byte record and about 8 crossings of 28 B
 // in the light's arena.
 constexpr double kWalkBytesPerPoint = 320.0;
 // The smallest scattering tolerance (relative to max |L|) that float iterates can meet: 16 ulp.
