@@ -140,12 +140,15 @@ struct LightVolume::Impl {
   // kind (all points, or those a level-1 piece changed; a volume's first calls combine all).
   double last_full_combine_ms = 0, last_partial_combine_ms = 0;
   double last_full_publish_ms = 0, last_partial_publish_ms = 0, last_copy_back_ms = 0, last_scatter_setup_ms = -1;
-  // Whether the next combine and publish take every point (see combine() and publish()).
+  // Whether the next combine and publish take every point (combine() and publish() decide by
+  // these; a full combine makes the publish after it full).
   bool combine_is_full() const {
     const std::size_t n = 3 * mesh->points.size();
     return combine_pending || !has_rgb || pre.size() != n || rgb.size() != n;
   }
-  bool publish_is_full() const { return publish_all || combine_is_full() || rgb_out.size() != 3 * mesh->points.size(); }
+  bool publish_takes_all() const { return publish_all || rgb_out.size() != 3 * mesh->points.size(); }
+  bool publish_is_full() const { return combine_is_full() || publish_takes_all(); }
+  bool scatters() const { return opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0; }
   double expected_publish_ms() const { return publish_is_full() ? last_full_publish_ms : last_partial_publish_ms; }
   double expected_combine_ms() const { return combine_is_full() ? last_full_combine_ms : last_partial_combine_ms; }
   double last_gpu_pass_ms = -1;                   // a GPU level-1 pass cannot stop at a deadline
@@ -168,7 +171,7 @@ struct LightVolume::Impl {
       const auto p = static_cast<std::size_t>(point_order[i]);
       for (int c = 0; c < 3; ++c) rgb_out[3 * p + c] = rgb[3 * i + c];
     };
-    const bool all = publish_all || rgb_out.size() != 3 * np;
+    const bool all = publish_takes_all();
     if (all) {
       rgb_out.resize(3 * np);
       parallel_for(np, 1 << 14, [&](std::size_t b, std::size_t e) {
@@ -293,9 +296,8 @@ struct LightVolume::Impl {
     }
   }
   void combine() {
-    const std::size_t np = mesh->points.size();
-    const bool scatter = opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0;
-    if (!combine_pending && has_rgb && pre.size() == 3 * np && rgb.size() == 3 * np) {
+    const bool scatter = scatters();
+    if (!combine_is_full()) {
       // Only the points a level-1 call changed (a frame's share of a pass: a few percent of
       // them), each updated as by combine_all.
       for (std::int32_t point : combine_points) {
@@ -412,8 +414,7 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
   im.rgb.assign(3 * im.mesh->points.size(), 0.0f);
   im.rgb_out = im.rgb;
   if (!im.gpu) im.prime_level0();
-  const auto& s = im.opt.sigma_s;
-  if (!im.gpu && (s[0] > 0 || s[1] > 0 || s[2] > 0)) im.prime_scatter_setup();
+  if (!im.gpu && im.scatters()) im.prime_scatter_setup();
 }
 
 LightVolume::~LightVolume() = default;
