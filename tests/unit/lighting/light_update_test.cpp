@@ -11,6 +11,28 @@ namespace {
 
 std::shared_ptr<const TetMesh> cube() { return tet_block(8, 8, 8, {0, 0, 0}, {1, 1, 1}); }
 
+// The largest difference of light k's rho between two volumes on the same mesh.
+double max_rho_difference(const LightVolume& a, const LightVolume& b, std::size_t k) {
+  const std::vector<float>& ra = a.light_rho(k);
+  const std::vector<float>& rb = b.light_rho(k);
+  double worst = 0;
+  for (std::size_t p = 0; p < ra.size(); ++p) worst = std::max(worst, std::fabs(static_cast<double>(ra[p]) - rb[p]));
+  return worst;
+}
+
+// A mesh with a through-hole and two fields that light it differently, for the recorded-walk
+// tests.
+struct TwoFieldScene {
+  std::shared_ptr<const TetMesh> mesh = prepare(fixtures::tet_block_with_hole(8));
+  LightVolumeOptions opt = [] {
+    LightVolumeOptions o;
+    o.level0_resolution = 16;
+    return o;
+  }();
+  std::vector<float> first = field(*mesh, [](const Vec3d& p) { return 0.2 + 0.3 * p.x; });
+  std::vector<float> second = field(*mesh, [](const Vec3d& p) { return 0.9 - 0.4 * p.y + 0.1 * std::sin(7 * p.z); });
+};
+
 // Only the light that changed is recomputed; a colour-only change recombines without
 // recomputing; a transfer-function change recomputes every light.
 TEST(LightUpdate, OnlyChangedLightsRecompute) {
@@ -192,21 +214,15 @@ TEST(LightUpdate, SameFieldSameLightWhateverCameBefore) {
     fresh.set_lights({light});
     fresh.set_field(a, ramp_tf(2.5));
     ASSERT_TRUE(fresh.update().converged);
-    double worst = 0;
-    for (std::size_t p = 0; p < mesh->points.size(); ++p)
-      worst = std::max(worst, std::fabs(static_cast<double>(warm.light_rho(0)[p]) - fresh.light_rho(0)[p]));
-    EXPECT_LT(worst, 1e-5) << (light.kind == Light::Kind::point ? "point" : "directional");
+    EXPECT_LT(max_rho_difference(warm, fresh, 0), 1e-5) << (light.kind == Light::Kind::point ? "point" : "directional");
   }
 }
 
 TEST(LightUpdate, WalksRecordedAfterALightMoveReplayCorrectly) {
   // A moved light records its walks again into storage its old walks used; the next field
   // replays them. Any walk left pointing at storage another walk took would read its crossings.
-  const auto mesh = prepare(fixtures::tet_block_with_hole(8));
-  LightVolumeOptions opt;
-  opt.level0_resolution = 16;
-  const auto first = field(*mesh, [](const Vec3d& p) { return 0.2 + 0.3 * p.x; });
-  const auto second = field(*mesh, [](const Vec3d& p) { return 0.9 - 0.4 * p.y + 0.1 * std::sin(7 * p.z); });
+  const TwoFieldScene sc;
+  const auto& [mesh, opt, first, second] = sc;
   const std::vector<Light> before{directional({1, 0.3, 0.2}), point_light({0.45, 0.5, 1.6})};
   const std::vector<Light> after{directional({0.2, 1, -0.3}), point_light({-0.6, 0.4, 0.5})};
   LightVolume warm(mesh, opt), fresh(mesh, opt);
@@ -220,20 +236,12 @@ TEST(LightUpdate, WalksRecordedAfterALightMoveReplayCorrectly) {
   fresh.set_lights(after);
   fresh.set_field(second, ramp_tf(2.5));
   ASSERT_TRUE(fresh.update().converged);
-  for (std::size_t k = 0; k < after.size(); ++k) {
-    double worst = 0;
-    for (std::size_t p = 0; p < mesh->points.size(); ++p)
-      worst = std::max(worst, std::fabs(static_cast<double>(warm.light_rho(k)[p]) - fresh.light_rho(k)[p]));
-    EXPECT_LT(worst, 2e-4) << "light " << k;
-  }
+  for (std::size_t k = 0; k < after.size(); ++k) EXPECT_LT(max_rho_difference(warm, fresh, k), 2e-4) << "light " << k;
 }
 
 TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
-  const auto mesh = prepare(fixtures::tet_block_with_hole(8));
-  LightVolumeOptions opt;
-  opt.level0_resolution = 16;
-  const auto first = field(*mesh, [](const Vec3d& p) { return 0.2 + 0.3 * p.x; });
-  const auto second = field(*mesh, [](const Vec3d& p) { return 0.9 - 0.4 * p.y + 0.1 * std::sin(7 * p.z); });
+  const TwoFieldScene sc;
+  const auto& [mesh, opt, first, second] = sc;
   const std::vector<Light> lights{directional({1, 0.3, 0.2}), point_light({0.45, 0.5, 1.6})};
   LightVolume warm(mesh, opt), fresh(mesh, opt);
   warm.set_lights(lights);
@@ -246,9 +254,7 @@ TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
   fresh.set_field(second, ramp_tf(2.5));
   ASSERT_TRUE(fresh.update().converged);
   double worst = 0, moved = 0;
-  for (std::size_t k = 0; k < lights.size(); ++k)
-    for (std::size_t p = 0; p < mesh->points.size(); ++p)
-      worst = std::max(worst, std::fabs(static_cast<double>(warm.light_rho(k)[p]) - fresh.light_rho(k)[p]));
+  for (std::size_t k = 0; k < lights.size(); ++k) worst = std::max(worst, max_rho_difference(warm, fresh, k));
   for (std::size_t p = 0; p < mesh->points.size(); ++p)
     moved = std::max(moved, std::fabs(static_cast<double>(fresh.light_rho(0)[p]) - rho_first[p]));
   EXPECT_LT(worst, 2e-4);
@@ -262,10 +268,7 @@ TEST(LightUpdate, RecordedWalksMatchFreshWalks) {
   ASSERT_TRUE(traced.update().converged);
   traced.set_field(second, ramp_tf(2.5));
   ASSERT_TRUE(traced.update().converged);
-  double apart = 0;
-  for (std::size_t p = 0; p < mesh->points.size(); ++p)
-    apart = std::max(apart, std::fabs(static_cast<double>(traced.light_rho(1)[p]) - warm.light_rho(1)[p]));
-  EXPECT_LT(apart, 2e-4);
+  EXPECT_LT(max_rho_difference(traced, warm, 1), 2e-4);
 }
 
 // Level-0 memory budget: a resolution that does not fit is reduced, one that cannot fit at all
