@@ -176,11 +176,13 @@ public:
         __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_slot)]);
         m_phase = Phase::enter;
         return true;
+      case Phase::cached:
       case Phase::hinted: {
-        // The start for a nearby direction: most often still the start.
+        // The start's face: known (cached; only the crossing is wanted), or a hint, the start for
+        // a nearby direction, most often still the start.
         const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
         const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
-        if (leaves_through(face)) {
+        if (leaves_through(face) || m_phase == Phase::cached) {
           *m_cache = m_slot << 2 | m_k;
           m_phase = Phase::enter;
         } else {
@@ -189,13 +191,6 @@ public:
           m_slot = m_k = -1;
           search_star();
         }
-        return true;
-      }
-      case Phase::cached: {
-        const WalkTet& w = m_in.tets[static_cast<std::size_t>(m_slot)];
-        const std::int32_t face[3] = {w.v[kFaceVertices[m_k][0]], w.v[kFaceVertices[m_k][1]], w.v[kFaceVertices[m_k][2]]};
-        (void)leaves_through(face);  // known to hold: only the crossing is wanted
-        m_phase = Phase::enter;
         return true;
       }
       case Phase::enter:
