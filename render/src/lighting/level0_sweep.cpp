@@ -59,8 +59,9 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
 
     // A directional light has no node plane in the grid: every node reads the same three
     // neighbours, at fixed offsets, and only the rows and the first node of a row on the inflow
-    // side read outside (light 1). The same arithmetic as the general row below, in the same
-    // order (an axis of weight 0 adds 0 times a finite value), without its per-node tests, and
+    // side read outside (light 1). Each node is the upwind sum over the axes, in axis order, of
+    // weight x neighbour's rho x its half-step factor (an axis of weight 0 adds 0 times a finite
+    // value), times the node's own factor; no test per node beyond the occluder mask, and
     // kRowsAtOnce rows of an anti-diagonal node by node: each row is a chain of dependent
     // updates (a node reads the one before it), and independent chains side by side overlap.
     const std::ptrdiff_t nx = dims[0], nxy = static_cast<std::ptrdiff_t>(dims[0]) * dims[1];
@@ -95,7 +96,8 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
           rho[id] = static_cast<float>(flush(real * static_cast<double>(scratch[id])));
         }
     };
-    auto row = [&](int j, int k) {
+    // A point light's row: the upwind neighbours and their weights change from node to node.
+    auto point_row = [&](int j, int k) {
       int s[3], idx[3] = {0, j, k};
       s[1] = j == centre[1] ? 0 : o[1];
       s[2] = k == centre[2] ? 0 : o[2];
@@ -108,53 +110,35 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
           rho[id] = 0.0f;
           continue;
         }
+        const Vec3d r = grid.position(i, j, k) - P;
+        const double dist = length(r);
+        if (dist == 0.0) {
+          rho[id] = 1.0f;
+          continue;
+        }
+        double w[3], sum = 0;
+        for (int a = 0; a < 3; ++a) {
+          w[a] = s[a] != 0 ? std::fabs(r[a]) / dist / h[a] : 0.0;
+          sum += w[a];
+        }
+        const double ti = static_cast<double>(tau[id]);
         double value = 0;
-        if (!point) {
-          double real = 0;
-          bool outside = false;
+        if (sum == 0.0) {
+          value = std::exp(-sigma_a * ti * dist);  // the light's own node
+        } else {
+          const double ds = std::min(1.0 / sum, dist);
           for (int a = 0; a < 3; ++a) {
-            if (w_dir[a] == 0.0) continue;
+            if (w[a] == 0.0) continue;
             const int nb = idx[a] - s[a];
             if (nb < 0 || nb >= dims[a]) {
-              outside = true;
+              value = 1.0;
               break;
             }
             int nidx[3] = {idx[0], idx[1], idx[2]};
             nidx[a] = nb;
             const std::size_t nid = grid.index(nidx[0], nidx[1], nidx[2]);
-            real += w_dir[a] * static_cast<double>(rho[nid]) * static_cast<double>(scratch[nid]);
-          }
-          value = outside ? 1.0 : real * static_cast<double>(scratch[id]);
-        } else {
-          const Vec3d r = grid.position(i, j, k) - P;
-          const double dist = length(r);
-          if (dist == 0.0) {
-            rho[id] = 1.0f;
-            continue;
-          }
-          double w[3], sum = 0;
-          for (int a = 0; a < 3; ++a) {
-            w[a] = s[a] != 0 ? std::fabs(r[a]) / dist / h[a] : 0.0;
-            sum += w[a];
-          }
-          const double ti = static_cast<double>(tau[id]);
-          if (sum == 0.0) {
-            value = std::exp(-sigma_a * ti * dist);  // the light's own node
-          } else {
-            const double ds = std::min(1.0 / sum, dist);
-            for (int a = 0; a < 3; ++a) {
-              if (w[a] == 0.0) continue;
-              const int nb = idx[a] - s[a];
-              if (nb < 0 || nb >= dims[a]) {
-                value = 1.0;
-                break;
-              }
-              int nidx[3] = {idx[0], idx[1], idx[2]};
-              nidx[a] = nb;
-              const std::size_t nid = grid.index(nidx[0], nidx[1], nidx[2]);
-              value += w[a] / sum * static_cast<double>(rho[nid]) *
-                       std::exp(-0.5 * sigma_a * ds * (ti + static_cast<double>(tau[nid])));
-            }
+            value += w[a] / sum * static_cast<double>(rho[nid]) *
+                     std::exp(-0.5 * sigma_a * ds * (ti + static_cast<double>(tau[nid])));
           }
         }
         rho[id] = static_cast<float>(flush(value));
@@ -175,7 +159,7 @@ void solve_level0(const Level0Grid& grid, const Light& light, double sigma_a, st
             k[n] = start[2] + o[2] * (m - jj);
           }
           if (point)
-            for (int q = 0; q < n; ++q) row(j[q], k[q]);
+            for (int q = 0; q < n; ++q) point_row(j[q], k[q]);
           else
             directional_rows(j, k, n);
         }
