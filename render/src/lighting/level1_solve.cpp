@@ -443,14 +443,21 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
     for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {
-      const std::size_t e = std::min(end, b + kLevel1Batch);
+      std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
-      const auto expected = std::chrono::duration<double, std::milli>(std::max(0.0, state.vertex_ms) * static_cast<double>(e - b));
-      if (!first_batch && now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(expected) >= deadline) {
-        state.next_group = g;
-        state.next_vertex = b;
-        state.residual = residual;
-        return false;
+      if (!first_batch && state.vertex_ms > 0) {
+        // The batch shrinks to what is expected to fit before the deadline (a whole one left
+        // half a batch of each frame's budget unused on average); one too small to be worth
+        // waking the threads for waits for the next call.
+        const double left_ms = std::chrono::duration<double, std::milli>(deadline - now).count();
+        const double fits = left_ms / state.vertex_ms;
+        if (fits < static_cast<double>(std::min(e - b, kLevel1MinBatch))) {
+          state.next_group = g;
+          state.next_vertex = b;
+          state.residual = residual;
+          return false;
+        }
+        e = std::min(e, b + static_cast<std::size_t>(fits));
       }
       first_batch = false;
       // After the first pass most batches hold a few vertices to update, if any: the threads are

@@ -146,6 +146,8 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
 
 /// Vertices per batch of a pass: the granularity at which a time budget can stop it.
 inline constexpr std::size_t kLevel1Batch = 2048;
+/// The smallest batch a pass starts to use up the rest of a time budget.
+inline constexpr std::size_t kLevel1MinBatch = 256;
 
 /// One Gauss-Seidel pass of eq. 8 over the vertices in `order` (groups in order, the vertices
 /// of a group in parallel, reading the values of earlier groups already updated):
@@ -153,8 +155,9 @@ inline constexpr std::size_t kLevel1Batch = 2048;
 /// rho(x_d) interpolated in level 1 (interpolate_light), the level-0 value where the walk left
 /// the mesh, 1 at the light. The first pass after a reset computes every vertex; later passes
 /// only the stale ones and those whose departure corners changed in this pass (the others would
-/// reproduce their value exactly). A pass stops between batches of vertices when the next is not
-/// expected to end by `deadline` (state.vertex_ms; one batch always runs) and resumes there on
+/// reproduce their value exactly). A pass stops between batches of vertices when not even
+/// kLevel1MinBatch of them are expected to end by `deadline` (state.vertex_ms; the last batch
+/// shrinks to what fits; one batch always runs) and resumes there on
 /// the next call; returns true when the pass finished, its largest change then
 /// in state.residual. `lost` counts walks that hit their move cap.
 bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
