@@ -207,7 +207,18 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     state.in_pass = true;
     // A directional light's rays are all parallel: every point projected once per pass start
     // (the field's scalars ride along), so a walk step reads one 32-byte record per point.
-    if (!point && state.full) project_parallel(mesh, back, ctx.field.scalars, state.parallel);
+    state.hint_next = state.hint_end = 0;
+    if (!point && state.full) {
+      project_parallel(mesh, back, ctx.field.scalars, state.parallel);
+      // A new light's starts from a sweep over the tets (hint_parallel_starts), in slices before
+      // the first batch. Not when most starts are known or hinted: under the same light (a new
+      // field or step) they are cached, and a light that moved by a little mostly keeps them.
+      const auto unknown = std::count(state.start_tet.begin(), state.start_tet.end(), -1);
+      if (static_cast<std::size_t>(unknown) > np / 8) {
+        hint_plane(state.parallel, state.hint_xy);
+        state.hint_end = ctx.topology.walk_tets.size();
+      }
+    }
     if (state.full)
       state.full_setup_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - setup_start).count();
   }
@@ -440,6 +451,17 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
   // the vertices of a group read only earlier groups' final values, so a group may be finished
   // on the next call; its new values are published when its last batch is done.
   bool first_batch = true;
+  while (state.hint_next < state.hint_end) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!first_batch && state.hint_slice_ms > 0 &&
+        std::chrono::duration<double, std::milli>(deadline - now).count() < state.hint_slice_ms)
+      return false;
+    first_batch = false;
+    const std::size_t e = std::min(state.hint_end, state.hint_next + kHintSlice);
+    hint_parallel_starts(ctx.topology.walk_tets, state.hint_xy, state.hint_next, e, state.start_tet);
+    state.hint_next = e;
+    state.hint_slice_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
+  }
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
     for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {

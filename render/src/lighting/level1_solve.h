@@ -110,6 +110,11 @@ struct PassState {
   std::vector<std::int32_t> changed_now;
   std::vector<float> next;
   std::vector<ParallelPoint> parallel;  ///< a directional light's projections, built per full pass
+  /// A new directional light's start hints, made at the start of its full pass in slices of
+  /// walk records [hint_next, hint_end) (hint_parallel_starts) from hint_xy (hint_plane).
+  std::vector<float> hint_xy;
+  std::size_t hint_next = 0, hint_end = 0;
+  double hint_slice_ms = -1.0;  ///< the last slice's time (< 0: none yet); kept across clear()
   // A pass interrupted by its deadline resumes at next_group, vertex next_vertex of the order.
   bool in_pass = false, full = false;
   std::size_t next_group = 0, next_vertex = 0;
@@ -143,6 +148,10 @@ struct PassState {
   }
 };
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step);
+
+/// Walk records per slice of a new light's start hints (hint_parallel_starts), the granularity
+/// at which a time budget can stop them.
+inline constexpr std::size_t kHintSlice = 1 << 16;
 
 /// Vertices per batch of a pass: the granularity at which a time budget can stop it.
 inline constexpr std::size_t kLevel1Batch = 2048;

@@ -2,6 +2,7 @@
 #include "level1_walk.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <optional>
 
@@ -441,6 +442,49 @@ void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vect
     for (std::size_t p = b; p < e; ++p) {
       const Projected q = frame.project(mesh.points[p]);
       out[p] = {q.x, q.y, q.depth, scalars[p]};
+    }
+  });
+}
+
+void hint_plane(const std::vector<ParallelPoint>& points, std::vector<float>& xy) {
+  xy.resize(2 * points.size());
+  if (points.empty()) return;
+  const double x0 = points[0].x, y0 = points[0].y;
+  parallel_for(points.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) {
+      xy[2 * p] = static_cast<float>(points[p].x - x0);
+      xy[2 * p + 1] = static_cast<float>(points[p].y - y0);
+    }
+  });
+}
+
+void hint_parallel_starts(const std::vector<detail::WalkTet>& tets, const std::vector<float>& xy, std::size_t first,
+                          std::size_t last, std::vector<std::int32_t>& start) {
+  parallel_for(last - first, 1 << 13, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = first + b; t < first + e; ++t) {
+      const WalkTet& w = tets[t];
+      float x[4], y[4];
+      for (int j = 0; j < 4; ++j) {
+        x[j] = xy[2 * static_cast<std::size_t>(w.v[j])];
+        y[j] = xy[2 * static_cast<std::size_t>(w.v[j]) + 1];
+      }
+      unsigned facing = 0, away = 0;
+      for (int f = 0; f < 4; ++f) {
+        const int a = kFaceVertices[f][0], c = kFaceVertices[f][1], d = kFaceVertices[f][2];
+        const float area = (x[c] - x[a]) * (y[d] - y[a]) - (y[c] - y[a]) * (x[d] - x[a]);
+        facing |= static_cast<unsigned>(area > 0) << f;
+        away |= static_cast<unsigned>(area < 0) << f;
+      }
+      // Exactly one face towards the light and the other three away from it.
+      if ((facing & (facing - 1)) != 0 || (facing | away) != 15 || (facing & away) != 0) continue;
+      const int k = __builtin_ctz(facing);
+      // Only a tie gives one vertex two such tets, and then any of them is a fair hint; the
+      // stores are atomic so that the race is harmless. What other tets store here are hints
+      // too, so the test of what may be replaced does not depend on them.
+      std::atomic_ref<std::int32_t> slot(start[static_cast<std::size_t>(w.v[k])]);
+      const std::int32_t now = slot.load(std::memory_order_relaxed);
+      if (now == -1 || now <= kFirstHint)
+        slot.store(kFirstHint - (static_cast<std::int32_t>(t) << 2 | k), std::memory_order_relaxed);
     }
   });
 }

@@ -84,6 +84,26 @@ inline std::int32_t hint_start(std::int32_t start) {
   return start >= 0 ? kFirstHint - start : start <= kFirstHint ? start : -1;
 }
 
+/// A directional light's starts, made hints (see walk_to_light) by a sweep over the tets instead
+/// of a search through each vertex's star. With outward faces, the ray from a vertex runs into a
+/// tet and out through the face opposite it exactly when that face is the only one of the tet
+/// facing the light: its area projected across the light is the sum of the three edge values
+/// walk_to_light tests there, and the other three faces' areas are those values negated. A tet
+/// with exactly one face of positive area and three of negative area therefore names the start
+/// of the vertex opposite that face, and each face is tested once per tet instead of once per
+/// star it lies in (four). Ties (a zero area: rays in a face's plane) are left to the search; a
+/// hint that rounding got wrong fails walk_to_light's test and is searched for, so the walks'
+/// results do not change. At 1M tets a new light's walks run 10 % fewer instructions, the sweep
+/// included.
+///
+/// The points across the light as the sweep reads them: two floats per point relative to the
+/// first, 8 bytes instead of 32, so that its gathers mostly hit the core's own cache.
+void hint_plane(const std::vector<ParallelPoint>& points, std::vector<float>& xy);
+/// The sweep over walk records [first, last): hints for the vertices whose start is unknown
+/// (-1) or a hint; a cached start or -2 stays.
+void hint_parallel_starts(const std::vector<detail::WalkTet>& tets, const std::vector<float>& xy, std::size_t first,
+                          std::size_t last, std::vector<std::int32_t>& start);
+
 /// One walk of a batch: walk_to_light's arguments and, after walk_batch, its result.
 struct WalkJob {
   std::int32_t v;

@@ -138,6 +138,62 @@ TEST(Level1Walk, HintedStartsEqualSearchedStarts) {
   }
 }
 
+// The starts that one sweep over the tets hints for a new directional light
+// (hint_parallel_starts) are the searched starts wherever the rays are generic, and where they
+// are not (an axis-aligned light: rays along faces and edges, the tie rule decides) the walks
+// are still exactly the searched ones, start cache included. Slices give what one sweep gives,
+// and a cached start or -2 is never replaced.
+TEST(Level1Walk, SweptHintsAreTheSearchedStarts) {
+  const auto mesh = prepare(fixtures::tet_block_with_hole(9));
+  WalkScene sc(mesh, field(*mesh, [](const Vec3d& p) { return 0.3 + 0.6 * p.x * p.y + 0.2 * std::sin(5 * p.z); }),
+               ramp_tf(2.0));
+  const std::size_t np = sc.mesh->points.size(), nt = sc.topology.walk_tets.size();
+  const Vec3d oblique = normalize(Vec3d{-0.8, 0.45, 0.4}), axis{-1, 0, 0};
+  for (const Vec3d* towards : {&oblique, &axis}) {
+    const WalkInput in = sc.input(towards);
+    std::vector<float> xy;
+    render::lighting::hint_plane(sc.parallel, xy);
+    std::vector<std::int32_t> swept(np, -1), sliced(np, -1), searched(np, -1);
+    render::lighting::hint_parallel_starts(sc.topology.walk_tets, xy, 0, nt, swept);
+    for (std::size_t first = 0; first < nt; first += 1000)
+      render::lighting::hint_parallel_starts(sc.topology.walk_tets, xy, first, std::min(nt, first + 1000), sliced);
+    EXPECT_EQ(swept, sliced);
+    int hinted = 0, right = 0, interior = 0;
+    for (std::size_t p = 0; p < np; ++p) {
+      const auto v = static_cast<std::int32_t>(p);
+      const Vec3d& x = sc.mesh->points[p];
+      std::vector<WalkCrossing> with_hint, without;
+      const std::int32_t hint = swept[p];
+      const Trace a = render::lighting::walk_to_light(in, v, x, *towards, 0.35, &swept[p], &with_hint);
+      const Trace b = render::lighting::walk_to_light(in, v, x, *towards, 0.35, &searched[p], &without);
+      ASSERT_TRUE(same(a, b)) << "point " << p;
+      ASSERT_EQ(swept[p], searched[p]) << "point " << p;
+      ASSERT_EQ(with_hint.size(), without.size()) << "point " << p;
+      for (std::size_t k = 0; k < without.size(); ++k)
+        EXPECT_EQ(0, std::memcmp(&with_hint[k], &without[k], sizeof(WalkCrossing)));
+      hinted += hint != -1;
+      right += hint != -1 && render::lighting::kFirstHint - hint == searched[p];
+      interior += searched[p] >= 0;
+    }
+    if (towards == &oblique) {
+      // Generic rays: every vertex that starts inside got its start from the sweep.
+      EXPECT_EQ(right, hinted);
+      EXPECT_EQ(hinted, interior);
+      EXPECT_GT(interior, static_cast<int>(np / 2));
+    }
+    // A cached start and a ray leaving at its vertex (-2) stay; unknown and hinted entries are
+    // replaced.
+    std::vector<std::int32_t> kept(np, -1);
+    for (std::size_t p = 0; p < np; ++p) kept[p] = p % 4 == 0 ? 7 : p % 4 == 1 ? -2 : p % 4 == 2 ? render::lighting::kFirstHint - 5 : -1;
+    render::lighting::hint_parallel_starts(sc.topology.walk_tets, xy, 0, nt, kept);
+    for (std::size_t p = 0; p < np; ++p) {
+      if (p % 4 == 0) EXPECT_EQ(kept[p], 7);
+      if (p % 4 == 1) EXPECT_EQ(kept[p], -2);
+      if (p % 4 >= 2 && swept[p] >= 0 && towards == &oblique) EXPECT_EQ(render::lighting::kFirstHint - kept[p], swept[p]);
+    }
+  }
+}
+
 // In a homogeneous medium the optical depth of a walk is tau times the length it ran inside the
 // mesh, whatever the direction: along grid edges and faces (where every exit is a tie), obliquely,
 // and from boundary vertices along the boundary (which the tie rule alone would push outside:
