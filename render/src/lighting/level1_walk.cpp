@@ -33,6 +33,7 @@ constexpr int kMaxMoves = 200000;
 // Rays parallel to a directional light: projections shared by every walk of the light, taken
 // relative to the walk's own start.
 struct ParallelRays {
+  static constexpr bool kSnaps = false;  // see TurnedRays
   const ParallelPoint* points;
   ParallelPoint origin;
   Projected at(std::int32_t id) const {
@@ -45,6 +46,7 @@ struct ParallelRays {
 
 // Rays converging on a point light: each walk projects the points it meets into its own frame.
 struct ConvergingRays {
+  static constexpr bool kSnaps = false;  // see TurnedRays
   detail::RayFrame frame;
   const Vec3d* points;
   const float* scalars;
@@ -63,6 +65,8 @@ struct ConvergingRays {
 // keeps its products.)
 template <class Rays>
 struct TurnedRays {
+  // Its walks are retries: edge values within rounding noise of 0 are snapped to 0 (Walker::edge).
+  static constexpr bool kSnaps = true;
   Rays rays;
   int quarter;
   Projected at(std::int32_t id) const {
@@ -110,9 +114,8 @@ template <class Rays>
 template <class Rays>
 class Walker {
 public:
-  Walker(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::vector<WalkCrossing>* record,
-         bool snap = false)
-      : m_in(in), m_rays(rays), m_v(v), m_length(length), m_record(record), m_snap(snap) {}
+  Walker(const WalkInput& in, const Rays& rays, std::int32_t v, double length, std::vector<WalkCrossing>* record)
+      : m_in(in), m_rays(rays), m_v(v), m_length(length), m_record(record) {}
 
   // Finds the start and enters the first tet, all at once; false: the walk is already over
   // (see trace()). Then step() until it returns false.
@@ -271,7 +274,7 @@ private:
   // every tet of the edge still sees the same value).
   double edge(const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) const {
     const double e = edge_value(a, ia, b, ib);
-    return m_snap && std::fabs(e) <= noise(a, b) ? 0.0 : e;
+    return Rays::kSnaps && std::fabs(e) <= noise(a, b) ? 0.0 : e;
   }
   static double noise(const Projected& a, const Projected& b) {
     return kSnap * (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y);
@@ -349,7 +352,6 @@ private:
   std::int32_t m_v;
   double m_length;
   std::vector<WalkCrossing>* m_record;
-  bool m_snap;
   Trace m_tr;
   bool m_grazed = false;
   std::int32_t m_slot = -1, m_next = -1;
@@ -372,7 +374,7 @@ bool walk_turned(const WalkInput& in, const Rays& rays, std::int32_t v, double l
                  std::vector<WalkCrossing>* record, Trace& out) {
   for (int quarter = 0; quarter <= 3; ++quarter) {
     if (record) record->clear();
-    Walker<TurnedRays<Rays>> walker(in, TurnedRays<Rays>{rays, quarter}, v, length, record, true);
+    Walker<TurnedRays<Rays>> walker(in, TurnedRays<Rays>{rays, quarter}, v, length, record);
     if (!walker.start(nullptr)) continue;
     while (walker.step()) {
     }
@@ -465,21 +467,26 @@ void hint_parallel_starts(const std::vector<detail::WalkTet>& tets, const std::v
   parallel_for(last - first, 1 << 13, [&](std::size_t b, std::size_t e) {
     for (std::size_t t = first + b; t < first + e; ++t) {
       const WalkTet& w = tets[t];
-      float x[4], y[4];
-      for (int j = 0; j < 4; ++j) {
-        x[j] = xy[2 * static_cast<std::size_t>(w.v[j])];
-        y[j] = xy[2 * static_cast<std::size_t>(w.v[j]) + 1];
+      // The areas of the three faces through point 0 from its edges to the others
+      // (kFaceVertices: face 1 is (0, 3, 2), face 2 (0, 1, 3), face 3 (0, 2, 1)); face 0's is
+      // minus their sum, as the projected areas of a closed surface sum to zero.
+      const std::size_t p0 = 2 * static_cast<std::size_t>(w.v[0]);
+      float ex[4], ey[4];
+      for (int j = 1; j < 4; ++j) {
+        const std::size_t pj = 2 * static_cast<std::size_t>(w.v[j]);
+        ex[j] = xy[pj] - xy[p0];
+        ey[j] = xy[pj + 1] - xy[p0 + 1];
       }
-      unsigned facing = 0, away = 0;
-      for (int f = 0; f < 4; ++f) {
-        const int a = kFaceVertices[f][0], c = kFaceVertices[f][1], d = kFaceVertices[f][2];
-        const float area = (x[c] - x[a]) * (y[d] - y[a]) - (y[c] - y[a]) * (x[d] - x[a]);
-        facing |= static_cast<unsigned>(area > 0) << f;
-        away |= static_cast<unsigned>(area < 0) << f;
-      }
-      // Exactly one face towards the light and the other three away from it.
-      if ((facing & (facing - 1)) != 0 || (facing | away) != 15 || (facing & away) != 0) continue;
-      const int k = __builtin_ctz(facing);
+      const float a1 = ex[3] * ey[2] - ey[3] * ex[2];
+      const float a2 = ex[1] * ey[3] - ey[1] * ex[3];
+      const float a3 = ex[2] * ey[1] - ey[2] * ex[1];
+      // Exactly one face towards the light and three away from it: either faces 1 to 3 all away
+      // (face 0 then faces the light), or two of them away and the third towards the light by
+      // more than they are away (so face 0 is away). Counted without branches: which case holds
+      // is a coin toss per tet.
+      const int away = (a1 < 0) + (a2 < 0) + (a3 < 0);
+      if (!(away == 3 || (away == 2 && a1 + a2 + a3 > 0))) continue;
+      const int k = away == 3 ? 0 : (a1 >= 0) + 2 * (a2 >= 0) + 3 * (a3 >= 0);
       // Only a tie gives one vertex two such tets, and then any of them is a fair hint; the
       // stores are atomic so that the race is harmless. What other tets store here are hints
       // too, so the test of what may be replaced does not depend on them.
