@@ -482,12 +482,14 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {
       std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
-      if (!first_batch && state.vertex_ms > 0) {
+      if (!first_batch && deadline != std::chrono::steady_clock::time_point::max()) {
         // The batch shrinks to what is expected to fit before the deadline (a whole one left
         // half a batch of each frame's budget unused on average); one too small to be worth
-        // waking the threads for waits for the next call.
+        // waking the threads for waits for the next call, and so does one never timed (after
+        // the start hints, the first batch of a pass: its first vertices, on the side the light
+        // enters, leave the mesh at once, so a small probe would time them far too fast).
         const double left_ms = std::chrono::duration<double, std::milli>(deadline - now).count();
-        const double fits = left_ms / state.vertex_ms;
+        const double fits = state.vertex_ms > 0 ? left_ms / state.vertex_ms : 0.0;
         if (fits < static_cast<double>(std::min(e - b, kLevel1MinBatch))) {
           state.next_group = g;
           state.next_vertex = b;
