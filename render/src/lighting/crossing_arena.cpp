@@ -63,6 +63,19 @@ WalkCrossing* CrossingArena::allocate(std::size_t n) {
   return span;
 }
 
+void CrossingArena::reserve(std::size_t n) {
+  std::size_t held = 0;
+  for (const Block& b : m_blocks) held += b.size;
+  while (held < n) {
+    m_blocks.push_back(new_block(0));
+    const Block& b = m_blocks.back();
+    // A write per page faults it in (the contents stay undefined: spans are uninitialised).
+    char* bytes = reinterpret_cast<char*>(b.data);
+    for (std::size_t at = 0; at < b.bytes; at += 4096) bytes[at] = 0;
+    held += b.size;
+  }
+}
+
 void CrossingArena::reset() {
   std::lock_guard<std::mutex> lock(*m_mutex);
   m_block = m_used = 0;

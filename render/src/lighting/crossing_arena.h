@@ -23,6 +23,9 @@ public:
 
   /// n contiguous crossings (n > 0), uninitialised. Thread-safe.
   WalkCrossing* allocate(std::size_t n);
+  /// Blocks for at least n crossings in all, allocated now and their pages touched, so that
+  /// walks recorded into them later do not pay for the first touch. Not thread-safe.
+  void reserve(std::size_t n);
   /// Every span handed out is free again; the blocks are kept for the next walks.
   void reset();
   /// Bytes held by the blocks.

@@ -80,7 +80,32 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
   return (1.0 - beta) * geometric + beta * linear;
 }
 
-VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step) {
+double estimate_vertex_ms(const Level1Context& ctx) {
+  const std::size_t np = ctx.mesh.points.size();
+  const std::size_t count = std::min(np, kLevel1Batch);
+  if (count == 0) return -1.0;
+  const Vec3d towards{0, 0, 1};
+  std::vector<ParallelPoint> projected;
+  project_parallel(ctx.mesh, towards, std::vector<float>(np, 0.0f), projected);
+  const ExtinctionTable unit(TransferFunction{{{0.0, 1.0, 1.0, 1.0}}, {{0.0, 1.0}}});
+  const WalkInput in{ctx.topology.walk_tets, ctx.topology.tet_offsets, ctx.topology.star, unit, projected.data(),
+                     ctx.mesh.points.data(), nullptr};
+  std::vector<std::int32_t> starts(count, -1);
+  std::vector<std::vector<WalkCrossing>> records(count);
+  std::vector<WalkJob> jobs(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto v = static_cast<std::int32_t>(i * np / count);
+    jobs[i] = {v, ctx.mesh.points[static_cast<std::size_t>(v)], towards, ctx.step_of(static_cast<std::size_t>(v)),
+               &starts[i], &records[i], {}};
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  parallel_for(count, 64, [&](std::size_t b, std::size_t e) { walk_batch(in, jobs.data() + b, e - b); });
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return 1.5 * ms / static_cast<double>(count);
+}
+
+VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step,
+                           VertexOrder reuse) {
   // This runs as one piece of a frame budget, so it avoids sorting: keys and slabs by a bucket
   // count, in parallel over fixed blocks of points. Within a slab the points keep their own order
   // (any order is valid there): the light volume numbers them along a Morton curve, so
@@ -90,9 +115,13 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
   auto used = [&](std::size_t p) { return topology.tet_offsets[p] != topology.tet_offsets[p + 1]; };
   constexpr std::size_t kBlock = 1 << 14;
   const std::size_t blocks = (np + kBlock - 1) / kBlock;
-  std::vector<double> key(np), block_lo(blocks, HUGE_VAL), block_hi(blocks, -HUGE_VAL);
+  std::vector<double> block_lo(blocks, HUGE_VAL), block_hi(blocks, -HUGE_VAL);
   std::vector<std::size_t> block_used(blocks, 0);
-  VertexOrder order;
+  VertexOrder order = std::move(reuse);
+  order.vertices.clear();
+  order.group_end.clear();
+  order.key.resize(np);
+  std::vector<double>& key = order.key;
   order.path_length.resize(np);
   parallel_for(blocks, 1, [&](std::size_t b0, std::size_t b1) {
     for (std::size_t b = b0; b < b1; ++b) {

@@ -74,6 +74,18 @@ struct VertexOrder {
   std::vector<std::int32_t> group_of;  ///< per point; -1 for points in no tet
   /// Per point: box_path_length from it towards the light (read at every departure tet's corners).
   std::vector<double> path_length;
+  std::vector<double> key;  ///< order_vertices' scratch: each point's position along the light
+  /// Allocates (and touches) the arrays for np points, the order staying empty.
+  void reserve(std::size_t np) {
+    for (auto* v : {&path_length, &key}) {
+      v->assign(np, 0.0);
+      v->clear();
+    }
+    for (auto* v : {&vertices, &group_of}) {
+      v->assign(np, 0);
+      v->clear();
+    }
+  }
 };
 
 /// A vertex's walk towards the light, kept while the light and the step stay. The faces crossed
@@ -141,17 +153,44 @@ struct PassState {
       crossings.reset();
     }
   }
+  /// Allocates (and touches) the memory of a first pass over np vertices, the recorded walks'
+  /// `crossings` included if `record`, while leaving the state as new: a light volume does this
+  /// for its first light when it is built, so that the light's first frames do not spend their
+  /// budget on page faults (about 17 000 at 1M tets, 1 ms each on two cores).
+  void reserve(std::size_t np, bool record, std::size_t crossings) {
+    prepare_walks(np, record);
+    if (record) this->crossings.reserve(crossings);
+    departure_corners.assign(np, {-1, -1, -1, -1});
+    departure_corners.clear();
+    changed_now.assign(np, 0);
+    changed_now.clear();
+    stale.assign(np, 0);
+    changed.assign(np, 0);
+    next.assign(np, 0.0f);
+    parallel.assign(np, ParallelPoint{});
+    hint_xy.assign(2 * np, 0.0f);
+  }
   /// Every recorded walk invalid (the light moved): their crossings' storage serves the next.
   void forget_walks() {
     for (RecordedWalk& w : walks) w = RecordedWalk{};
     crossings.reset();
   }
 };
-VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step);
+/// `reuse`: an earlier order whose arrays are filled anew (no new memory for a light that moved).
+VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step,
+                           VertexOrder reuse = {});
 
 /// Walk records per slice of a new light's start hints (hint_parallel_starts), the granularity
 /// at which a time budget can stop them.
 inline constexpr std::size_t kHintSlice = 1 << 16;
+
+/// A first estimate of a pass's time per vertex (PassState::vertex_ms) on this mesh and machine,
+/// for a light whose passes have not run yet: walks from kLevel1Batch vertices spread over the
+/// mesh towards a light along -z through a unit medium, run in parallel as a pass runs them and
+/// timed, rounded up by half for the rest of a vertex's update (30 % of a pass at 1M tets).
+/// Untimed, a pass's batches wait for a call of their own (see level1_pass), and a new light's
+/// call after its start hints left a third of its budget unused.
+double estimate_vertex_ms(const Level1Context& ctx);
 
 /// Vertices per batch of a pass: the granularity at which a time budget can stop it.
 inline constexpr std::size_t kLevel1Batch = 2048;

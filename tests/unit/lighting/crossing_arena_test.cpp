@@ -50,6 +50,26 @@ TEST(CrossingArena, ResetReusesTheBlocks) {
   EXPECT_EQ(arena.bytes(), held);  // the same spans again: no new block
 }
 
+// Reserved blocks hold the spans asked for later: no block is added until they are used up, and
+// a reserve below what is held adds nothing.
+TEST(CrossingArena, ReservedBlocksServeLaterSpans) {
+  CrossingArena arena;
+  arena.reserve(200000);
+  const std::size_t held = arena.bytes();
+  EXPECT_GE(held, 200000 * sizeof(WalkCrossing));
+  std::size_t handed = 0;
+  while (handed + 300 <= 150000) {
+    WalkCrossing* span = arena.allocate(300);
+    span[299].t = 1.0f;  // writable to its end
+    handed += 300;
+  }
+  EXPECT_EQ(arena.bytes(), held);
+  arena.reserve(1000);
+  EXPECT_EQ(arena.bytes(), held);
+  for (int i = 0; i < 1000; ++i) (void)arena.allocate(300);  // past the reserve: blocks added
+  EXPECT_GT(arena.bytes(), held);
+}
+
 TEST(CrossingArena, MovedArenaKeepsItsSpans) {
   CrossingArena arena;
   WalkCrossing* span = arena.allocate(10);

@@ -65,5 +65,23 @@ TEST(VertexOrder, PointsCountedInBlocksKeepTheSameOrder) {
   expect_slab_order(*mesh, directional({-1, 0.3, 0.2}), 1e-4);
 }
 
+// An order built into the arrays of an earlier one (a light that moved) equals one built anew.
+TEST(VertexOrder, ReusedArraysGiveTheSameOrder) {
+  const auto mesh = tet_block(12, 12, 12, {-1, -1, -1}, {1, 1, 1});
+  const render::lighting::Level1Topology topology(*mesh);
+  const Light before = directional({-1, 0.3, 0.2}), after = point_light({0.05, 2.0, -0.3});
+  for (double step : {0.15, 1e-4}) {
+    auto reused = render::lighting::order_vertices(*mesh, topology, before, 0.2);
+    const std::int32_t* storage = reused.vertices.data();
+    reused = render::lighting::order_vertices(*mesh, topology, after, step, std::move(reused));
+    const auto fresh = render::lighting::order_vertices(*mesh, topology, after, step);
+    EXPECT_EQ(reused.vertices, fresh.vertices);
+    EXPECT_EQ(reused.group_end, fresh.group_end);
+    EXPECT_EQ(reused.group_of, fresh.group_of);
+    EXPECT_EQ(reused.path_length, fresh.path_length);
+    EXPECT_EQ(reused.vertices.data(), storage) << "the arrays are reused";
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::lighting_test
