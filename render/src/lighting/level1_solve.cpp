@@ -212,6 +212,9 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
   return order;
 }
 
+// Vertices to update for which a batch wakes the other threads.
+constexpr std::size_t kParallelWork = 64;
+
 bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
                  const VertexOrder& order, std::vector<float>& rho1, PassState& state, std::atomic<std::size_t>& lost,
                  std::chrono::steady_clock::time_point deadline) {
@@ -529,16 +532,19 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       }
       first_batch = false;
       // After the first pass most batches hold a few vertices to update, if any: the threads are
-      // woken only for enough work (waking them per group cost a few ms per pass).
+      // woken only for enough work (waking them per group cost a few ms per pass). A vertex to
+      // update is a walk of a microsecond or more, so a few dozen are worth it (with 256, the
+      // 4 % of a 1M-tet mesh's vertices in its smallest groups ran on one thread).
       std::size_t work = e - b;
       if (!full) {
         work = 0;
-        for (std::size_t i = b; i < e && work < 256; ++i) work += needs_update(static_cast<std::size_t>(order.vertices[i]));
+        for (std::size_t i = b; i < e && work < kParallelWork; ++i)
+          work += needs_update(static_cast<std::size_t>(order.vertices[i]));
       }
-      if (work < 256)
+      if (work < kParallelWork)
         run(b, e);
       else
-        parallel_for(e - b, 64, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });
+        parallel_for(e - b, kParallelWork / 2, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });
       const double per_vertex =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count() / static_cast<double>(e - b);
       state.vertex_ms = state.vertex_ms < 0 ? per_vertex : 0.5 * (state.vertex_ms + per_vertex);
