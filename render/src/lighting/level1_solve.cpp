@@ -80,28 +80,38 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
   return (1.0 - beta) * geometric + beta * linear;
 }
 
-double estimate_vertex_ms(const Level1Context& ctx) {
+void prime_pass_timing(const Level1Context& ctx, PassState& state) {
+  using Clock = std::chrono::steady_clock;
+  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   const std::size_t np = ctx.mesh.points.size();
   const std::size_t count = std::min(np, kLevel1Batch);
-  if (count == 0) return -1.0;
+  if (count == 0) return;
   const Vec3d towards{0, 0, 1};
   std::vector<ParallelPoint> projected;
-  project_parallel(ctx.mesh, towards, std::vector<float>(np, 0.0f), projected);
+  const std::vector<float> zero(np, 0.0f);
+  project_parallel(ctx.mesh, towards, zero, projected);  // the first touch of `projected`, untimed
+  auto t0 = Clock::now();
+  project_parallel(ctx.mesh, towards, zero, projected);
+  std::vector<float> xy;
+  hint_plane(projected, xy);
+  state.full_setup_ms = 1.5 * ms_since(t0);
+  std::vector<std::int32_t> starts(np, -1);
+  t0 = Clock::now();
+  hint_parallel_starts(ctx.topology.walk_tets, xy, 0, std::min(kHintSlice, ctx.topology.walk_tets.size()), starts);
+  state.hint_slice_ms = 1.5 * ms_since(t0);
   const ExtinctionTable unit(TransferFunction{{{0.0, 1.0, 1.0, 1.0}}, {{0.0, 1.0}}});
   const WalkInput in{ctx.topology.walk_tets, ctx.topology.tet_offsets, ctx.topology.star, unit, projected.data(),
                      ctx.mesh.points.data(), nullptr};
-  std::vector<std::int32_t> starts(count, -1);
   std::vector<std::vector<WalkCrossing>> records(count);
   std::vector<WalkJob> jobs(count);
   for (std::size_t i = 0; i < count; ++i) {
     const auto v = static_cast<std::int32_t>(i * np / count);
     jobs[i] = {v, ctx.mesh.points[static_cast<std::size_t>(v)], towards, ctx.step_of(static_cast<std::size_t>(v)),
-               &starts[i], &records[i], {}};
+               &starts[static_cast<std::size_t>(v)], &records[i], {}};
   }
-  const auto t0 = std::chrono::steady_clock::now();
+  t0 = Clock::now();
   parallel_for(count, 64, [&](std::size_t b, std::size_t e) { walk_batch(in, jobs.data() + b, e - b); });
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return 1.5 * ms / static_cast<double>(count);
+  state.vertex_ms = 1.5 * ms_since(t0) / static_cast<double>(count);
 }
 
 VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, const Light& light, double step,
@@ -514,7 +524,13 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {
       std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
-      if (!first_batch && deadline != std::chrono::steady_clock::time_point::max()) {
+      if (first_batch && deadline != std::chrono::steady_clock::time_point::max() && state.vertex_ms > 0) {
+        // The call's first batch always runs (every call makes progress), as small as what
+        // fits, down to kLevel1MinBatch: a pass may start with little of the budget left.
+        const double left_ms = std::chrono::duration<double, std::milli>(deadline - now).count();
+        const auto fits = static_cast<std::size_t>(std::max(0.0, left_ms / state.vertex_ms));
+        e = std::min(e, b + std::max(fits, kLevel1MinBatch));
+      } else if (!first_batch && deadline != std::chrono::steady_clock::time_point::max()) {
         // The batch shrinks to what is expected to fit before the deadline (a whole one left
         // half a batch of each frame's budget unused on average); one too small to be worth
         // waking the threads for waits for the next call, and so does one never timed (after

@@ -184,13 +184,15 @@ VertexOrder order_vertices(const TetMesh& mesh, const Level1Topology& topology, 
 /// at which a time budget can stop them.
 inline constexpr std::size_t kHintSlice = 1 << 16;
 
-/// A first estimate of a pass's time per vertex (PassState::vertex_ms) on this mesh and machine,
-/// for a light whose passes have not run yet: walks from kLevel1Batch vertices spread over the
-/// mesh towards a light along -z through a unit medium, run in parallel as a pass runs them and
-/// timed, rounded up by half for the rest of a vertex's update (30 % of a pass at 1M tets).
-/// Untimed, a pass's batches wait for a call of their own (see level1_pass), and a new light's
-/// call after its start hints left a third of its budget unused.
-double estimate_vertex_ms(const Level1Context& ctx);
+/// First estimates of a pass's timings (PassState::vertex_ms, full_setup_ms, hint_slice_ms) on
+/// this mesh and machine, for a light whose passes have not run yet, so that its first pass
+/// plans its batches from its first call (untimed, a piece waits for a call of its own, and a
+/// new light's call after its start hints left a third of its budget unused). Timed on a light
+/// along -z through a unit medium: the projections of a full pass's set-up, one slice of start
+/// hints, and walks from kLevel1Batch vertices spread over the mesh, run in parallel as a pass
+/// runs them; each rounded up by half (the walks for the rest of a vertex's update, 30 % of a
+/// pass at 1M tets). A pass's own timings replace them as it runs.
+void prime_pass_timing(const Level1Context& ctx, PassState& state);
 
 /// Vertices per batch of a pass: the granularity at which a time budget can stop it.
 inline constexpr std::size_t kLevel1Batch = 2048;

@@ -394,7 +394,7 @@ struct LightVolume::Impl {
       l.order.reserve(np);
       l.pass_state.reserve(np, record_walks(1), kCrossingsPerWalk * np);
       const lighting::Level1Context ctx{*mesh, topology, field, grid, opt.occluders, opt.sigma_a, step, opt.level1_adaptive_step};
-      l.pass_state.vertex_ms = lighting::estimate_vertex_ms(ctx);
+      lighting::prime_pass_timing(ctx, l.pass_state);
     }
     first_light_ready = true;
   }
@@ -569,12 +569,15 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
         did_work = true;
         continue;
       }
-      // A CPU pass stops at the deadline by itself; it starts only with room for one batch of
-      // the size last timed, and a full pass also for its set-up (unknown: only as the first
-      // piece of a call).
+      // A CPU pass stops at the deadline by itself, after pieces it sizes to fit (batches down
+      // to kLevel1MinBatch vertices, slices of start hints); it starts only with room for its
+      // first piece, and a full pass also for its set-up (unknown: only as the first piece of a
+      // call).
       const auto& ps = l.pass_state;
       const bool starts_full = !ps.in_pass && ps.departure_corners.size() != mesh_points;
-      double expected = ps.vertex_ms < 0 ? -1.0 : ps.vertex_ms * static_cast<double>(lighting::kLevel1Batch);
+      double expected = ps.vertex_ms < 0 ? -1.0
+                                         : std::max(ps.vertex_ms * static_cast<double>(lighting::kLevel1MinBatch),
+                                                    starts_full || ps.hint_next < ps.hint_end ? ps.hint_slice_ms : 0.0);
       if (starts_full && expected >= 0) expected = ps.full_setup_ms < 0 ? -1.0 : expected + ps.full_setup_ms;
       if (!allowed(im.gpu ? im.last_gpu_pass_ms : expected)) break;
       const auto tp = Clock::now();
