@@ -14,6 +14,14 @@
 
 namespace penumbra::render::lighting {
 
+/// Makes v's storage hold n elements, written once so that its pages are in memory, and leaves v
+/// empty: a later resize or assign up to n then costs neither an allocation nor a page fault.
+template <class T>
+void reserve_touched(std::vector<T>& v, std::size_t n) {
+  v.assign(n, T{});
+  v.clear();
+}
+
 /// Everything one semi-Lagrangian pass reads.
 struct Level1Context {
   const TetMesh& mesh;
@@ -77,14 +85,10 @@ struct VertexOrder {
   std::vector<double> key;  ///< order_vertices' scratch: each point's position along the light
   /// Allocates (and touches) the arrays for np points, the order staying empty.
   void reserve(std::size_t np) {
-    for (auto* v : {&path_length, &key}) {
-      v->assign(np, 0.0);
-      v->clear();
-    }
-    for (auto* v : {&vertices, &group_of}) {
-      v->assign(np, 0);
-      v->clear();
-    }
+    reserve_touched(path_length, np);
+    reserve_touched(key, np);
+    reserve_touched(vertices, np);
+    reserve_touched(group_of, np);
   }
 };
 
@@ -160,15 +164,13 @@ struct PassState {
   void reserve(std::size_t np, bool record, std::size_t crossings) {
     prepare_walks(np, record);
     if (record) this->crossings.reserve(crossings);
-    departure_corners.assign(np, {-1, -1, -1, -1});
-    departure_corners.clear();
-    changed_now.assign(np, 0);
-    changed_now.clear();
-    stale.assign(np, 0);
-    changed.assign(np, 0);
-    next.assign(np, 0.0f);
-    parallel.assign(np, ParallelPoint{});
-    hint_xy.assign(2 * np, 0.0f);
+    reserve_touched(departure_corners, np);
+    reserve_touched(changed_now, np);
+    reserve_touched(stale, np);
+    reserve_touched(changed, np);
+    reserve_touched(next, np);
+    reserve_touched(parallel, np);
+    reserve_touched(hint_xy, 2 * np);
   }
   /// Every recorded walk invalid (the light moved): their crossings' storage serves the next.
   void forget_walks() {

@@ -401,12 +401,8 @@ struct LightVolume::Impl {
   void prime_first_light() {
     const std::size_t np = mesh->points.size();
     LightState& l = first_light;
-    for (auto* v : {&l.rho0_vertex, &l.rho1, &at_vertex_scratch}) {
-      v->assign(np, 0.0f);
-      v->clear();
-    }
-    l.rho0.assign(grid.size(), 0.0f);
-    l.rho0.clear();
+    for (auto* v : {&l.rho0_vertex, &l.rho1, &at_vertex_scratch}) lighting::reserve_touched(*v, np);
+    lighting::reserve_touched(l.rho0, grid.size());
     if (opt.mode != LightSolveMode::level0_only) {
       l.order.reserve(np);
       l.pass_state.reserve(np, record_walks(1), kCrossingsPerWalk * np);
