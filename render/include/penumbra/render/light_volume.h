@@ -207,7 +207,10 @@ struct Level0View {
 /// Memory besides the level-0 grid, measured on a 750K-tet block: about 200 bytes per tet (its own
 /// copy of the mesh with the points renumbered, the walk records, each point's star, the
 /// scattering stencil), and about 310 bytes per point for each light, its recorded walks
-/// included (see walk_memory_budget_bytes).
+/// included (see walk_memory_budget_bytes). The first light's share is allocated (and its pages
+/// touched) by the constructor, which also times that light's first level-1 pieces, so that a
+/// new volume's first frames spend their budget on the solve (about 40 ms more construction at
+/// 1M tets); set_lights hands it to the first light.
 class LightVolume {
 public:
   LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions options = {});
