@@ -524,27 +524,25 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     for (std::size_t b = std::max(begin, state.next_vertex); b < end;) {
       std::size_t e = std::min(end, b + kLevel1Batch);
       const auto now = std::chrono::steady_clock::now();
-      if (first_batch && deadline != std::chrono::steady_clock::time_point::max() && state.vertex_ms > 0) {
-        // The call's first batch always runs (every call makes progress), as small as what
-        // fits, down to kLevel1MinBatch: a pass may start with little of the budget left.
+      if (deadline != std::chrono::steady_clock::time_point::max()) {
+        // The batch shrinks to what is expected to fit before the deadline (a whole one or none
+        // left half a batch of each frame's budget unused on average). The call's first batch
+        // always runs, so that every call makes progress, down to kLevel1MinBatch vertices (a
+        // pass may start with little of the budget left), and whole if never timed. After it,
+        // a batch too small to be worth waking the threads for waits for the next call, and so
+        // does one never timed (after the start hints, the first batch of a pass: its first
+        // vertices, on the side the light enters, leave the mesh at once, so a small probe
+        // would time them far too fast).
         const double left_ms = std::chrono::duration<double, std::milli>(deadline - now).count();
-        const auto fits = static_cast<std::size_t>(std::max(0.0, left_ms / state.vertex_ms));
-        e = std::min(e, b + std::max(fits, kLevel1MinBatch));
-      } else if (!first_batch && deadline != std::chrono::steady_clock::time_point::max()) {
-        // The batch shrinks to what is expected to fit before the deadline (a whole one left
-        // half a batch of each frame's budget unused on average); one too small to be worth
-        // waking the threads for waits for the next call, and so does one never timed (after
-        // the start hints, the first batch of a pass: its first vertices, on the side the light
-        // enters, leave the mesh at once, so a small probe would time them far too fast).
-        const double left_ms = std::chrono::duration<double, std::milli>(deadline - now).count();
-        const double fits = state.vertex_ms > 0 ? left_ms / state.vertex_ms : 0.0;
-        if (fits < static_cast<double>(std::min(e - b, kLevel1MinBatch))) {
+        const double fits = state.vertex_ms > 0 ? left_ms / state.vertex_ms : first_batch ? HUGE_VAL : 0.0;
+        if (!first_batch && fits < static_cast<double>(std::min(e - b, kLevel1MinBatch))) {
           state.next_group = g;
           state.next_vertex = b;
           state.residual = residual;
           return false;
         }
-        e = std::min(e, b + static_cast<std::size_t>(fits));
+        const double room = std::max(fits, first_batch ? static_cast<double>(kLevel1MinBatch) : 0.0);
+        if (room < static_cast<double>(e - b)) e = b + static_cast<std::size_t>(room);
       }
       first_batch = false;
       // After the first pass most batches hold a few vertices to update, if any: the threads are

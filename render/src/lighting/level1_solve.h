@@ -207,9 +207,11 @@ inline constexpr std::size_t kLevel1MinBatch = 256;
 /// rho(x_d) interpolated in level 1 (interpolate_light), the level-0 value where the walk left
 /// the mesh, 1 at the light. The first pass after a reset computes every vertex; later passes
 /// only the stale ones and those whose departure corners changed in this pass (the others would
-/// reproduce their value exactly). A pass stops between batches of vertices when not even
-/// kLevel1MinBatch of them are expected to end by `deadline` (state.vertex_ms; the last batch
-/// shrinks to what fits; one batch always runs) and resumes there on
+/// reproduce their value exactly). A new directional light's full pass begins with its start
+/// hints (hint_parallel_starts) in slices. A pass stops between slices or batches of vertices
+/// when not even kLevel1MinBatch vertices are expected to end by `deadline` (state.vertex_ms;
+/// batches shrink to what fits; the call's first runs whatever the room, down to
+/// kLevel1MinBatch) and resumes there on
 /// the next call; returns true when the pass finished, its largest change then
 /// in state.residual. `lost` counts walks that hit their move cap.
 bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector<float>& rho0,
