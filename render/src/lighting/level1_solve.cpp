@@ -82,7 +82,9 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 
 void prime_pass_timing(const Level1Context& ctx, PassState& state) {
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
+  auto ms_since = [](Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
   const std::size_t np = ctx.mesh.points.size();
   const std::size_t count = std::min(np, kLevel1Batch);
   if (count == 0) return;

@@ -92,8 +92,8 @@ struct Crossing {
 // Inlined: called apart, passing and returning the crossings through memory took about 8 % of
 // a walk's instructions.
 template <class Rays>
-[[gnu::always_inline]] inline Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected q[3], const double w[3],
-                    const Crossing& from) {
+[[gnu::always_inline]] inline Crossing cross_face(const Rays& rays, const std::int32_t id[3], const Projected q[3],
+                                                  const double w[3], const Crossing& from) {
   const double sum = w[0] + w[1] + w[2];
   if (!(sum > 0)) return from;
   Crossing c{{id[0], id[1], id[2]}, {0, 0, 0}, 0.0, 0.0};
