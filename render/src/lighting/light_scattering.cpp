@@ -191,6 +191,10 @@ bool scatter_iteration_part(const ScatterPlan& plan, const std::vector<float>& p
   parallel_for(last - first, 1, [&](std::size_t c0, std::size_t c1) {
     for (std::size_t c = first + c0; c < first + c1; ++c) {
       const std::size_t begin = plan.chunk_begin[c], end = plan.chunk_begin[c + 1];
+      // Blocks past the last point are empty. (Their begin, the point count, need not be a
+      // multiple of a slice: the loop below would then redo the last slice, reading as L_{k-1}
+      // what its own block had already overwritten with L_{k+1}, at the same time.)
+      if (begin == end) continue;
       float residual = 0.0f;
       for (std::size_t slice = begin / C; slice * C < end; ++slice) {
         // The slice's neighbour sums, a column at a time.

@@ -181,6 +181,50 @@ TEST(LightScattering, IterationInPiecesEqualsWholeIterations) {
   EXPECT_GT(piece, 10u);  // the iterations really were split
 }
 
+// Every point follows the Chebyshev recurrence, compared with the recurrence written out in
+// double over the mesh's own edges: on a mesh of 343 points the plan's last slice is partial and
+// its last blocks are empty (a block past the last point once redid the last slice, reading as
+// the iterate before the last what its own block had already overwritten; the solve still
+// converged, more slowly, and its iterates depended on the threads' timing).
+TEST(LightScattering, IterationsFollowTheRecurrenceOnEveryPoint) {
+  const auto mesh = tet_block(6, 6, 6, {0, 0, 0}, {1, 1, 1});
+  const std::size_t np = mesh->points.size();
+  const render::lighting::Level1Topology topo(*mesh);
+  const std::vector<float> w = render::lighting::scatter_weights(*mesh, topo);
+  const render::lighting::ScatterPlan plan = render::lighting::plan_scatter(*mesh, topo, w);
+  ASSERT_NE(np % render::lighting::kScatterSlice, 0u);
+  ASSERT_EQ(plan.chunk_begin[render::lighting::kScatterChunks - 1], np);  // an empty last block
+  const std::array<double, 3> sigma{0.5, 1.0, 4.0};
+  std::vector<float> pre(3 * np), planned_pre, planned, out;
+  for (std::size_t p = 0; p < np; ++p)
+    for (int c = 0; c < 3; ++c) pre[3 * p + c] = (p * 7 + static_cast<std::size_t>(c)) % 5 == 0 ? 1.0f : 0.1f;
+  render::lighting::to_plan_order(plan, pre, planned_pre);
+  planned = planned_pre;
+  std::vector<double> x(pre.begin(), pre.end()), before = x, next(3 * np);
+  std::array<double, 3> omega{};
+  render::lighting::ScatterSolve solve;
+  for (int k = 0; k < 8; ++k) {
+    render::lighting::scatter_iteration(plan, planned_pre, sigma, planned, solve);
+    render::lighting::chebyshev_weights(k, sigma, omega);
+    for (std::size_t p = 0; p < np; ++p)
+      for (std::size_t c = 0; c < 3; ++c) {
+        double sum = 0, wsum = 0;
+        for (auto e = topo.edge_offsets[p]; e < topo.edge_offsets[p + 1]; ++e) {
+          sum += w[static_cast<std::size_t>(e)] * x[3 * static_cast<std::size_t>(topo.edge_ids[static_cast<std::size_t>(e)]) + c];
+          wsum += w[static_cast<std::size_t>(e)];
+        }
+        const double jacobi = (pre[3 * p + c] + sigma[c] * sum) / (1 + sigma[c] * wsum);
+        next[3 * p + c] = k == 0 ? jacobi : before[3 * p + c] + omega[c] * (jacobi - before[3 * p + c]);
+      }
+    before = x;
+    x = next;
+    render::lighting::to_point_order(plan, planned, out);
+    double worst = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) worst = std::max(worst, std::fabs(x[i] - out[i]));
+    EXPECT_LT(worst, 1e-5) << "iteration " << k + 1;
+  }
+}
+
 // The solve against the equation itself: iterated to convergence, every point satisfies
 // L_v = (L0_v + s sum_i w_i L_i) / (1 + s sum_i w_i) with the normalised weights of eq. 12.
 // Chebyshev's acceleration is measured against plain Jacobi (omega = 1 throughout) on the same
