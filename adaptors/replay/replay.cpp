@@ -15,6 +15,7 @@
 #include "input_series.h"
 #include "step_range.h"
 #include "store_replay.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
 #include "penumbra/vtk/unstructured_grid_adaptor.h"
@@ -98,9 +99,6 @@ std::string prefixed(const std::string& text) {
   return (text.rfind(prefix, 0) == 0 ? text : prefix + text) + "\n";
 }
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 class Replay {
 public:

@@ -13,6 +13,7 @@
 
 #include "field_store.h"
 #include "occlusion_lighting.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/camera.h"
 #include "penumbra/render/cpu_ray_caster.h"
@@ -25,7 +26,6 @@ namespace penumbra::insitu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr double kPi = 3.14159265358979323846;
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/thread_pool.h"
 #include "tet_geometry.h"
 
@@ -82,9 +83,6 @@ double interpolate_light(const std::array<double, 4>& w, const double rho[4], co
 
 void prime_pass_timing(const Level1Context& ctx, PassState& state) {
   using Clock = std::chrono::steady_clock;
-  auto ms_since = [](Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  };
   const std::size_t np = ctx.mesh.points.size();
   const std::size_t count = std::min(np, kLevel1Batch);
   if (count == 0) return;
@@ -264,7 +262,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       }
     }
     if (state.full)
-      state.full_setup_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - setup_start).count();
+      state.full_setup_ms = ms_since(setup_start);
   }
   const bool full = state.full;
   const auto& topo = ctx.topology;
@@ -519,7 +517,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     const std::size_t e = std::min(state.hint_end, state.hint_next + kHintSlice);
     hint_parallel_starts(ctx.topology.walk_tets, state.hint_xy, state.hint_next, e, state.start_tet);
     state.hint_next = e;
-    state.hint_slice_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count();
+    state.hint_slice_ms = ms_since(now);
   }
   for (std::size_t g = state.next_group; g < order.group_end.size(); ++g) {
     const std::size_t begin = g == 0 ? 0 : order.group_end[g - 1], end = order.group_end[g];
@@ -561,8 +559,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
         run(b, e);
       else
         parallel_for(e - b, kParallelWork / 2, [&](std::size_t cb, std::size_t ce) { run(b + cb, b + ce); });
-      const double per_vertex =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - now).count() / static_cast<double>(e - b);
+      const double per_vertex = ms_since(now) / static_cast<double>(e - b);
       state.vertex_ms = state.vertex_ms < 0 ? per_vertex : 0.5 * (state.vertex_ms + per_vertex);
       b = e;
     }

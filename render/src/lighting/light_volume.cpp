@@ -14,6 +14,7 @@
 #include "level1_mesh.h"
 #include "level1_solve.h"
 #include "light_scattering.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 
@@ -30,9 +31,6 @@ constexpr double kWalkBytesPerPoint = 320.0;
 constexpr std::size_t kPointsPerTask = 4096;
 // The smallest scattering tolerance (relative to max |L|) that float iterates can meet: 16 ulp.
 constexpr double kScatterToleranceFloor = 16.0 / (1 << 24);
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 void check_options(const LightVolumeOptions& o) {
   const std::string call = "LightVolume: ";

@@ -28,7 +28,6 @@ using gpu::Clock;
 using gpu::CurrentContext;
 using gpu::DeviceBuffer;
 using gpu::GlApi;
-using gpu::ms_since;
 
 enum Binding : GLuint { kLevels, kInfos, kSchedule, kPoints, kResult, kGrid, kBindingCount };
 constexpr int kLocalSize = 64;  // cone_trace.comp's local_size_x

@@ -150,7 +150,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
                           grid.tau.data());
     if (opacity) run(1, buffers[2].name, buffers[0].name, n_grid, 0);
     gl.Finish();
-    const double upload_ms = gpu::ms_since(t_upload);
+    const double upload_ms = ms_since(t_upload);
 
     const auto t_filter = gpu::Clock::now();
     std::array<int, 3> dims = grid.dims;
@@ -187,7 +187,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
       offset += volume(dims);
     }
     gl.Finish();
-    out.filter_ms = gpu::ms_since(t_filter);
+    out.filter_ms = ms_since(t_filter);
     out.upload_ms = upload_ms;
 
     offset = 0;
@@ -206,7 +206,7 @@ GpuPyramidLevels gpu_build_pyramid_levels(const std::shared_ptr<GpuDevice>& devi
     throw;
   }
   release();
-  out.build_ms = gpu::ms_since(t0);
+  out.build_ms = ms_since(t0);
   return out;
 }
 

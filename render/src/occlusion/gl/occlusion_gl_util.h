@@ -8,14 +8,12 @@
 
 #include "gpu/gl_program.h"
 #include "gpu/gpu_device_impl.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::render::gpu {
 
 using Clock = std::chrono::steady_clock;
-inline double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 /// A storage buffer that grows on demand; checked against the device's limits. `who` names the
 /// caller in errors.
