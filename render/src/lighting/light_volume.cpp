@@ -419,6 +419,9 @@ struct LightVolume::Impl {
     const auto t0 = Clock::now();
     solve_level0(probe, unused);
     last_level0_ms = ms_since(t0);
+    // The solve left its vertex values with the probe and the probe's empty array as the
+    // scratch: the scratch takes the filled one back, not to be lost with the probe.
+    at_vertex_scratch = std::move(probe.rho0_vertex);
   }
   // The largest finite |pre|, the scale of the scattering's tolerance.
   void update_pre_scale() {
