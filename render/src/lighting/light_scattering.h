@@ -40,7 +40,7 @@ inline constexpr std::size_t kScatterSlice = 8;
 struct ScatterPlan {
   static constexpr std::size_t kDegreeWindow = 128;
   std::vector<std::int32_t> order;        ///< the point at each position
-  std::vector<std::size_t> chunk_begin;   ///< kScatterChunks + 1 positions, multiples of kScatterSlice but the last
+  std::vector<std::size_t> chunk_begin;   ///< kScatterChunks + 1 positions: multiples of kScatterSlice, or the point count (blocks past the last point are empty)
   std::vector<std::int64_t> slice_begin;  ///< per slice + 1: its first entry (columns x kScatterSlice entries)
   std::vector<std::int32_t> ids;          ///< per entry: the neighbour's position
   std::vector<float> weights;             ///< per entry: scatter_weights (0 in padding)
