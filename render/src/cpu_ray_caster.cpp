@@ -139,7 +139,7 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     double e[3];  // e[j]: edge v[j] -> v[j+1]
     for (int j = 0; j < 3; ++j) {
       const int n = j == 2 ? 0 : j + 1;
-      e[j] = edge_value(q[j], tri.v[j], q[n], tri.v[n]);
+      e[j] = edge_value(q[j], q[n]);
       // The ray enters through an outward face when it sees the face clockwise.
       if (edge_sign(e[j], q[j], tri.v[j], q[n], tri.v[n]) >= 0) return;
     }
@@ -210,7 +210,7 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
     double e_d[4];  // e(D, X) for X = A, B, C at 1..3
     int pattern = 0;
     for (int j = 1; j < 4; ++j) {
-      e_d[j] = edge_value(q[0], id[0], q[j], id[j]);
+      e_d[j] = edge_value(q[0], q[j]);
       pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
     }
     const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
@@ -218,7 +218,7 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
     // Start fetching the next tet now so that the integration below hides the memory latency.
     const std::int32_t next = w.next[opposite];
     if (next >= 0) __builtin_prefetch(&tets[static_cast<std::size_t>(next >> 2)]);
-    double wd = edge_value(q[x], id[x], q[y], id[y]);
+    double wd = edge_value(q[x], q[y]);
     double wx = -e_d[y], wy = e_d[x];
     const double w3[3] = {std::max(0.0, wd), std::max(0.0, wx), std::max(0.0, wy)};
     double t_out = t_in, s_out = s_in;

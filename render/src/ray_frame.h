@@ -5,14 +5,19 @@
 // only depends on the signs of the 2D cross products e(a, b) = q_a x q_b of its three edges
 // (e(a, b) is the Plücker permuted inner product of the ray and the edge a->b). Two rules make
 // the traversal watertight:
-//   1. Each edge's value is computed once per orientation: from the endpoint with the smaller
-//      point id to the larger, negated for the other direction. Every tet sharing an edge
-//      therefore sees exactly the same number, whatever the floating-point contraction.
+//   1. Every tet sharing an edge sees exactly the same number for it, up to the sign its
+//      direction gives: e = a.x * b.y - a.y * b.x is exactly antisymmetric, e(b, a) == -e(a, b)
+//      bit for bit, because the two products commute exactly and round-to-nearest subtraction is
+//      symmetric. That holds only with the products rounded separately: the render library is
+//      compiled with -ffp-contract=off, since a fused multiply-add would round one product only.
+//      (Computing each edge from its smaller point id would not need that, but the choice is a
+//      branch the processor mispredicts about one time in three along a walk.)
 //   2. An exactly zero value (the ray hits the edge's line) is decided by simulation of
 //      simplicity: the ray is displaced by (eps, eps^2) along (u, v), eps -> 0+, which gives
-//      sign(e) = -sign(dy), else sign(dx). This is a single consistent perturbation of the ray,
-//      so through a vertex or along an edge or a face plane the walk behaves as for a nearby
-//      generic ray: no segment lost or doubled. Only an edge parallel to the ray keeps sign 0.
+//      sign(e) = -sign(dy), else sign(dx), with dx, dy taken from the endpoint with the smaller
+//      point id. This is a single consistent perturbation of the ray, so through a vertex or
+//      along an edge or a face plane the walk behaves as for a nearby generic ray: no segment
+//      lost or doubled. Only an edge parallel to the ray keeps sign 0.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -45,15 +50,8 @@ struct RayFrame {
   }
 };
 
-/// Raw value of e(a, b) = q_a x q_b computed in the canonical direction (smaller id first):
-/// selects rather than branches, since the id order is unpredictable along a walk.
-inline double edge_value(const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) {
-  const bool forward = ia <= ib;
-  const Projected& p = forward ? a : b;
-  const Projected& q = forward ? b : a;
-  const double v = p.x * q.y - p.y * q.x;
-  return forward ? v : -v;
-}
+/// e(a, b) = q_a x q_b, exactly antisymmetric in a and b (rule 1 above).
+inline double edge_value(const Projected& a, const Projected& b) { return a.x * b.y - a.y * b.x; }
 
 /// Sign of e(a, b) with the simulation-of-simplicity tie rule (see the file comment).
 inline int edge_sign(double value, const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) {

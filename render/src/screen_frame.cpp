@@ -45,6 +45,7 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   // likewise for Y (down the screen): invert that for each face's corners.
   const Camera::Frame frame = camera.frame();
   const double half_h = frame.half_height, half_w = frame.half_width;
+  constexpr double kMargin = 1.0 / 256;
   struct TileRange {
     int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
   };
@@ -61,16 +62,17 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
         lo_y = std::min(lo_y, py);
         hi_y = std::max(hi_y, py);
       }
-      // One pixel of margin: a ray through a face's corner or edge must find it whichever way
-      // the rounding of this estimate goes (the entry test itself is exact).
+      // A margin of 1/256 pixel: a ray through a face's corner or edge must find it whichever
+      // way the rounding of this estimate goes (about 1e-13 pixel; the entry test itself is
+      // exact). A whole pixel would triple the faces a small bin gathers.
       auto tile_of = [tile](double p, int count) {
         return static_cast<int>(std::clamp(std::floor(p / tile), -1.0, static_cast<double>(count)));
       };
       TileRange& r = ranges[i];
-      r.x0 = std::max(0, tile_of(lo_x - 1.0, tiles_x));
-      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + 1.0, tiles_x));
-      r.y0 = std::max(0, tile_of(lo_y - 1.0, tiles_y));
-      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + 1.0, tiles_y));
+      r.x0 = std::max(0, tile_of(lo_x - kMargin, tiles_x));
+      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + kMargin, tiles_x));
+      r.y0 = std::max(0, tile_of(lo_y - kMargin, tiles_y));
+      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + kMargin, tiles_y));
     }
   });
   ScreenBins bins;

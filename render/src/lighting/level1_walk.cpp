@@ -252,13 +252,13 @@ public:
     double e_d[4];
     int pattern = 0;
     for (int j = 1; j < 4; ++j) {
-      e_d[j] = edge(q[0], id[0], q[j], id[j]);
+      e_d[j] = edge(q[0], q[j]);
       pattern |= static_cast<int>(edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
     }
     const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;
     m_next = w.next[abc[5 - x - y]];
     if (m_next >= 0) __builtin_prefetch(&m_in.tets[static_cast<std::size_t>(m_next >> 2)]);
-    const double w3[3] = {std::max(0.0, edge(q[x], id[x], q[y], id[y])), std::max(0.0, -e_d[y]),
+    const double w3[3] = {std::max(0.0, edge(q[x], q[y])), std::max(0.0, -e_d[y]),
                           std::max(0.0, e_d[x])};
     const std::int32_t face[3] = {id[0], id[x], id[y]};
     const Projected face_q[3] = {q[0], q[x], q[y]};
@@ -272,8 +272,8 @@ public:
 private:
   // An edge value; snapped to 0 within kSnap of its size when retrying (symmetric in a and b, so
   // every tet of the edge still sees the same value).
-  double edge(const Projected& a, std::int32_t ia, const Projected& b, std::int32_t ib) const {
-    const double e = edge_value(a, ia, b, ib);
+  double edge(const Projected& a, const Projected& b) const {
+    const double e = edge_value(a, b);
     return Rays::kSnaps && std::fabs(e) <= noise(a, b) ? 0.0 : e;
   }
   static double noise(const Projected& a, const Projected& b) {
@@ -289,7 +289,7 @@ private:
     bool positive = true;
     for (int j = 0; j < 3; ++j) {
       const int a = (j + 1) % 3, b = (j + 2) % 3;  // e(b, c) weighs a, and cyclically
-      e[j] = edge(q[a], face[a], q[b], face[b]);
+      e[j] = edge(q[a], q[b]);
       if (edge_positive(e[j], q[a], face[a], q[b], face[b])) continue;
       positive = false;
       // Clearly outside this edge: neither the start nor touched on its rim. Most faces of the
