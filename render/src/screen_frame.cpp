@@ -45,7 +45,6 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   // likewise for Y (down the screen): invert that for each face's corners.
   const Camera::Frame frame = camera.frame();
   const double half_h = frame.half_height, half_w = frame.half_width;
-  constexpr double kMargin = 1.0 / 256;
   struct TileRange {
     int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
   };
@@ -62,17 +61,26 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
         lo_y = std::min(lo_y, py);
         hi_y = std::max(hi_y, py);
       }
-      // A margin of 1/256 pixel: a ray through a face's corner or edge must find it whichever
-      // way the rounding of this estimate goes (about 1e-13 pixel; the entry test itself is
-      // exact). A whole pixel would triple the faces a small bin gathers.
-      auto tile_of = [tile](double p, int count) {
-        return static_cast<int>(std::clamp(std::floor(p / tile), -1.0, static_cast<double>(count)));
+      // Only pixel centres matter: a ray passes through pixel (px, py) exactly, so a face is
+      // listed in the tiles of the pixel centres its bounding box holds, and a face smaller
+      // than a pixel that holds none (most faces of a finely meshed surface) is listed nowhere.
+      // The margin of 1/256 pixel covers the rounding of this estimate (about 1e-13 pixel; the
+      // entry test itself is exact).
+      constexpr double kMargin = 1.0 / 256;
+      auto first_centre = [](double lo, int count) {
+        return static_cast<int>(std::clamp(std::ceil(lo - kMargin), 0.0, static_cast<double>(count)));
       };
+      auto last_centre = [](double hi, int count) {
+        return static_cast<int>(std::clamp(std::floor(hi + kMargin), -1.0, static_cast<double>(count - 1)));
+      };
+      const int cx0 = first_centre(lo_x, camera.width), cx1 = last_centre(hi_x, camera.width);
+      const int cy0 = first_centre(lo_y, camera.height), cy1 = last_centre(hi_y, camera.height);
       TileRange& r = ranges[i];
-      r.x0 = std::max(0, tile_of(lo_x - kMargin, tiles_x));
-      r.x1 = std::min(tiles_x - 1, tile_of(hi_x + kMargin, tiles_x));
-      r.y0 = std::max(0, tile_of(lo_y - kMargin, tiles_y));
-      r.y1 = std::min(tiles_y - 1, tile_of(hi_y + kMargin, tiles_y));
+      if (cx0 > cx1 || cy0 > cy1) {
+        r = {0, -1, 0, -1};
+        continue;
+      }
+      r = {cx0 / tile, cx1 / tile, cy0 / tile, cy1 / tile};
     }
   });
   ScreenBins bins;

@@ -60,15 +60,29 @@ TEST(ScreenPath, MeshInFrontMatchesPerRayWalk) {
   }
 }
 
-TEST(ScreenPath, TilesCrowdedWithSubPixelFacesUseTheBvh) {
-  // 8x8 pixels over ~2000 boundary faces: every 4x4-pixel bin holds hundreds of faces, so the
-  // frame finds entries through the BVH while still walking in screen space.
+TEST(ScreenPath, TilesCrowdedWithSubPixelFacesMatchPerRayWalk) {
+  // 8x8 pixels over ~2000 boundary faces: a face smaller than a pixel is listed only in the tile
+  // of a pixel centre its box holds, and none may be missed.
   const auto owned = fixtures::tet_block_with_hole(9);
   const auto mesh = test::prepare(owned);
   int covered = 0;
   EXPECT_LT(max_difference_to_traced_rays(owned, render::Camera::orbit(mesh->bounds, 37, 28, 35, 8, 8), covered),
             kTolerance);
   EXPECT_GT(covered, 10);
+}
+
+TEST(ScreenPath, TilesWhoseFacesAllCoverThePixelCentresUseTheBvh) {
+  // A slab of 400 cells, each 1/400 thin in y, seen along x with the image turned by 45 degrees:
+  // its end faces are thin strips lying diagonally across the picture, so the box of nearly
+  // every one of them holds the middle pixel centres. Those tiles list more faces than a
+  // search through the BVH costs, and the frame finds their entries through the BVH while still
+  // walking in screen space.
+  const auto owned = fixtures::block(BlockCells::tets, 1, 400, 1, {0, 0, 0}, {0.6, 1, 1});
+  const double r = std::sqrt(0.5);
+  const auto cam = render::Camera::look_at({-2.5, 0.52, 0.47}, {0.3, 0.5, 0.5}, {0, r, r}, 24, 8, 8);
+  int covered = 0;
+  EXPECT_LT(max_difference_to_traced_rays(owned, cam, covered), kTolerance);
+  EXPECT_GT(covered, 30);
 }
 
 TEST(ScreenPath, HexMeshSplitIntoTetsMatchesPerRayWalk) {
