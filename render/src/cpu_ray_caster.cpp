@@ -55,6 +55,17 @@ struct WalkStats {
   int aborted = 0;
 };
 
+// A segment walked but not yet integrated: a ray walks up to kPendingSegments tets, then
+// integrates them in one go. The walk is a chain of dependent loads and arithmetic (tet record,
+// new point, edge signs, exit face, next tet) and the integration is independent arithmetic per
+// segment; interleaved step by step, each step's integration fills the processor's window so
+// that the next step's chain cannot start early, while apart each runs at its own pace.
+struct PendingSegment {
+  double s0, s1, length;
+  int p0, p1;  // transfer-function pieces of s0 and s1, -1 for NaN
+};
+constexpr int kPendingSegments = 16;
+
 // Front to back. Usually one or two entries: insertion sort.
 void sort_entries(std::vector<Entry>& out) {
   for (std::size_t i = 1; i < out.size(); ++i)
@@ -69,6 +80,23 @@ constexpr std::int32_t kMaxBinFaces = 256;
 constexpr int kMaxZeroLengthSteps = 1024;
 // Relative to the mesh diagonal: stretches inside shorter than this are grazes, not entries.
 constexpr double kGrazeLength = 1e-12;
+
+// Composites the pending segments in order until the ray is opaque; true if it became opaque.
+// Counts the segments composited (the ones past the point where the ray became opaque were
+// walked for nothing and are not counted).
+bool integrate_pending(const TfTable& tf, const PendingSegment* pending, int count, double stop_transmittance,
+                       Composite& acc, WalkStats& stats) {
+  for (int i = 0; i < count; ++i) {
+    const PendingSegment& g = pending[i];
+    // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
+    if (g.p1 >= 0 && g.p0 >= 0 && !(g.p0 == g.p1 && tf.piece_empty(g.p0)))
+      tf.integrate(g.s0, g.p0, g.s1, g.p1, g.length, acc);
+    stats.length += g.length;
+    ++stats.segments;
+    if (acc.transmittance < stop_transmittance) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -189,6 +217,9 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
   int zero_steps = 0;
   std::int32_t face_id[3] = {-1, -1, -1};
   Projected face_q[3];
+  [[maybe_unused]] PendingSegment pending[kShaded ? 1 : kPendingSegments];
+  [[maybe_unused]] int pending_count = 0;
+  [[maybe_unused]] bool stopped = false;
   for (std::size_t step = 0; step <= tets.size(); ++step) {
     const WalkTet& w = tets[static_cast<std::size_t>(tet)];
     const int* abc = kAbc[k];
@@ -239,7 +270,7 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
       t_out = t_in;
       if (++zero_steps > kMaxZeroLengthSteps) {
         ++stats.aborted;
-        return t_out;
+        break;
       }
     } else {
       zero_steps = 0;
@@ -253,9 +284,9 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
         p0 = std::isnan(s0) ? -1 : tf.piece(s0);
       }
       if (t_out > t0 && t0 >= 0.0) {
-        // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
-        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
-          if constexpr (kShaded) {
+        if constexpr (kShaded) {
+          // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
+          if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
             const double phong = shade->phong(tet, f.d);
             Modulation mod;
             for (int c = 0; c < 3; ++c) {
@@ -263,13 +294,21 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
               mod.back[c] = l_out[c] * phong;
             }
             tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc, &mod);
-          } else {
-            tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc);
+          }
+          stats.length += t_out - t0;
+          ++stats.segments;
+          if (acc.transmittance < stop_transmittance) break;
+        } else {
+          pending[pending_count++] = {s0, s_out, t_out - t0, p0, p_out};
+          if (pending_count == kPendingSegments) {
+            const bool opaque = integrate_pending(tf, pending, pending_count, stop_transmittance, acc, stats);
+            pending_count = 0;
+            if (opaque) {
+              stopped = true;
+              break;
+            }
           }
         }
-        stats.length += t_out - t0;
-        ++stats.segments;
-        if (acc.transmittance < stop_transmittance) break;
       }
     }
     t_in = t_out;
@@ -290,6 +329,8 @@ double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const Tf
     k = next & 3;
     if (step == tets.size()) ++stats.aborted;  // a straight line meets each tet only once
   }
+  if constexpr (!kShaded)
+    if (!stopped) integrate_pending(tf, pending, pending_count, stop_transmittance, acc, stats);
   // A graze along the boundary (a few rounding units long) is not counted as an entry.
   if (stats.length - length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
   return t_in;
