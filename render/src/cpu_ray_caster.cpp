@@ -3,6 +3,8 @@
 #include "penumbra/render/cpu_ray_caster.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -59,12 +61,65 @@ struct WalkStats {
 // integrates them in one go. The walk is a chain of dependent loads and arithmetic (tet record,
 // new point, edge signs, exit face, next tet) and the integration is independent arithmetic per
 // segment; interleaved step by step, each step's integration fills the processor's window so
-// that the next step's chain cannot start early, while apart each runs at its own pace.
+// that the next step's chain cannot start early, while apart the chains of several rays overlap
+// (kRaysInFlight) and the integration runs at full width.
 struct PendingSegment {
   double s0, s1, length;
   int p0, p1;  // transfer-function pieces of s0 and s1, -1 for NaN
 };
 constexpr int kPendingSegments = 16;
+
+// One walk from a boundary entry, advanced a tet at a time by Impl::step, so that a tile can
+// keep several rays walking at once.
+struct WalkCursor {
+  std::int32_t tet = 0;
+  int k = 0;  // the face of `tet` the ray entered through
+  double t_in = 0, s_in = 0;
+  int p_in = -1;  // transfer-function piece of s_in, -1 for NaN
+  double l_in[3] = {0, 0, 0};
+  int zero_steps = 0;
+  std::size_t steps = 0;
+  double length_before = 0;
+  // The entry face's points and projections, for geometries that reuse them (kReuseFace).
+  std::int32_t face_id[3] = {-1, -1, -1};
+  Projected face_q[3];
+  // Unshaded walks: segments walked and not yet integrated; `opaque` once the ray is.
+  int pending_count = 0;
+  bool opaque = false;
+  PendingSegment pending[kPendingSegments];
+};
+
+// What every ray of a screen-space frame shares.
+struct FrameContext {
+  const Camera& camera;
+  Camera::Frame camera_frame;
+  const ScreenPoint* screen;
+  ScreenBasis basis;
+  const detail::ScreenBins& bins;
+  int bin, bins_x;
+  const TfTable& tf;
+  const ShadeContext* shade;
+  double stop_transmittance;
+};
+
+// One pixel's ray while it walks: its entries, the walk under way and its composite.
+struct RayJob {
+  int x = 0, y = 0;
+  RayFrame frame;
+  ScreenGeometry geo;
+  std::vector<Entry> entries;
+  std::size_t next_entry = 0;
+  double done = 0;  // depth where the last walk left the mesh
+  WalkCursor cursor;
+  Composite acc;
+  WalkStats stats;
+};
+
+// Rays a tile walks side by side. One walk step is a chain of dependent loads and arithmetic
+// that the processor cannot overlap with the next step of the same ray; the steps of
+// independent rays, interleaved, give it work to overlap (8 rays: about 12 % faster than one on
+// a 1M-tet mesh; 16 gain nothing more).
+constexpr int kRaysInFlight = 8;
 
 // Front to back. Usually one or two entries: insertion sort.
 void sort_entries(std::vector<Entry>& out) {
@@ -113,16 +168,25 @@ struct CpuRayCaster::Impl {
   template <class Geometry>
   void find_entries(const RayFrame& f, const Geometry& geo, const ShadeContext* shade,
                     std::vector<Entry>& out) const;
-  // kShaded: the emitted colour is modulated by `shade` (null otherwise); a separate
-  // instantiation keeps the unshaded walk free of it.
+  // Starts `c` at `entry` (see WalkCursor).
+  void begin_walk(const TfTable& tf, const Entry& entry, const WalkStats& stats, WalkCursor& c) const;
+  // Walks `c` through one tet. Returns false when its walk ended: at the boundary exit, when the
+  // ray became opaque or when the walk was cut short. kShaded: the emitted colour is modulated
+  // by `shade` (null otherwise); a separate instantiation keeps the unshaded walk free of it.
   template <bool kShaded, class Geometry>
-  double walk(const RayFrame& f, const Geometry& geo, const TfTable& tf,
-              const ShadeContext* shade, const Entry& entry, double stop_transmittance, Composite& acc,
-              WalkStats& stats) const;
+  bool step(const RayFrame& f, const Geometry& geo, const TfTable& tf, const ShadeContext* shade,
+            double stop_transmittance, WalkCursor& c, Composite& acc, WalkStats& stats) const;
+  // Counts an ended walk as an entry unless it only grazed the boundary.
+  void end_walk(const TfTable& tf, double stop_transmittance, WalkCursor& c, Composite& acc, WalkStats& stats) const;
+  // Composites one ray: every entry, front to back, until the ray is opaque.
   template <class Geometry>
   void trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                  const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
                  WalkStats& stats) const;
+  // Renders the pixels of one tile in screen space, keeping kRaysInFlight rays walking side by
+  // side (see RayJob).
+  template <bool kShaded>
+  void render_tile(const FrameContext& frame, int x0, int y0, int x1, int y1, RayJob* jobs, Image& image) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -203,137 +267,144 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
   sort_entries(out);
 }
 
-// Walks from `entry` to the boundary exit (or until the ray is opaque); returns the exit depth.
+void CpuRayCaster::Impl::begin_walk(const TfTable& tf, const Entry& entry, const WalkStats& stats,
+                                    WalkCursor& c) const {
+  c.tet = entry.tet;
+  c.k = entry.face;
+  c.t_in = entry.t;
+  c.s_in = entry.s;
+  c.p_in = std::isnan(entry.s) ? -1 : tf.piece(entry.s);
+  for (int i = 0; i < 3; ++i) c.l_in[i] = entry.light[i];
+  c.zero_steps = 0;
+  c.steps = 0;
+  c.length_before = stats.length;
+  c.face_id[0] = c.face_id[1] = c.face_id[2] = -1;
+  c.pending_count = 0;
+  c.opaque = false;
+}
+
+void CpuRayCaster::Impl::end_walk(const TfTable& tf, double stop_transmittance, WalkCursor& c, Composite& acc,
+                                  WalkStats& stats) const {
+  if (!c.opaque && c.pending_count > 0)
+    c.opaque = integrate_pending(tf, c.pending, c.pending_count, stop_transmittance, acc, stats);
+  c.pending_count = 0;
+  // A graze along the boundary (a few rounding units long) is not counted as an entry.
+  if (stats.length - c.length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
+}
+
 template <bool kShaded, class Geometry>
-double CpuRayCaster::Impl::walk(const RayFrame& f, const Geometry& geo, const TfTable& tf,
-                                const ShadeContext* shade, const Entry& entry, double stop_transmittance,
-                                Composite& acc, WalkStats& stats) const {
-  std::int32_t tet = entry.tet;
-  int k = entry.face;
-  double t_in = entry.t, s_in = entry.s;
-  double l_in[3] = {entry.light[0], entry.light[1], entry.light[2]}, l_out[3] = {0, 0, 0};
-  int p_in = std::isnan(s_in) ? -1 : tf.piece(s_in);  // transfer-function piece, -1 for NaN
-  const double length_before = stats.length;
-  int zero_steps = 0;
-  std::int32_t face_id[3] = {-1, -1, -1};
-  Projected face_q[3];
-  [[maybe_unused]] PendingSegment pending[kShaded ? 1 : kPendingSegments];
-  [[maybe_unused]] int pending_count = 0;
-  [[maybe_unused]] bool stopped = false;
-  for (std::size_t step = 0; step <= tets.size(); ++step) {
-    const WalkTet& w = tets[static_cast<std::size_t>(tet)];
-    const int* abc = kAbc[k];
-    const std::int32_t id[4] = {w.v[k], w.v[abc[0]], w.v[abc[1]], w.v[abc[2]]};  // D, A, B, C
-    // The entry face is the previous tet's exit face: reuse its projections (bit-identical to
-    // projecting again); only a welded duplicate point (another id) is projected anew.
-    Projected q[4];
-    q[0] = geo.at(id[0]);
-    for (int j = 1; j < 4; ++j) {
-      if constexpr (Geometry::kReuseFace) {
-        const bool m0 = id[j] == face_id[0], m1 = id[j] == face_id[1], m2 = id[j] == face_id[2];
-        if (m0 | m1 | m2) [[likely]]
-          q[j] = face_q[static_cast<int>(m1) + 2 * static_cast<int>(m2)];  // index, not branches
-        else
-          q[j] = geo.at(id[j]);
-      } else {
+[[gnu::always_inline]] inline bool CpuRayCaster::Impl::step(const RayFrame& f, const Geometry& geo, const TfTable& tf,
+                                                            const ShadeContext* shade, double stop_transmittance,
+                                                            WalkCursor& c, Composite& acc, WalkStats& stats) const {
+  const WalkTet& w = tets[static_cast<std::size_t>(c.tet)];
+  const int* abc = kAbc[c.k];
+  const std::int32_t id[4] = {w.v[c.k], w.v[abc[0]], w.v[abc[1]], w.v[abc[2]]};  // D, A, B, C
+  // The entry face is the previous tet's exit face: reuse its projections (bit-identical to
+  // projecting again); only a welded duplicate point (another id) is projected anew.
+  Projected q[4];
+  q[0] = geo.at(id[0]);
+  for (int j = 1; j < 4; ++j) {
+    if constexpr (Geometry::kReuseFace) {
+      const bool m0 = id[j] == c.face_id[0], m1 = id[j] == c.face_id[1], m2 = id[j] == c.face_id[2];
+      if (m0 | m1 | m2) [[likely]]
+        q[j] = c.face_q[static_cast<int>(m1) + 2 * static_cast<int>(m2)];  // index, not branches
+      else
         q[j] = geo.at(id[j]);
-      }
-    }
-    double e_d[4];  // e(D, X) for X = A, B, C at 1..3
-    int pattern = 0;
-    for (int j = 1; j < 4; ++j) {
-      e_d[j] = edge_value(q[0], q[j]);
-      pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
-    }
-    const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
-    const int opposite = abc[5 - x - y];  // local index of the vertex not on the exit face
-    // Start fetching the next tet now so that the integration below hides the memory latency.
-    const std::int32_t next = w.next[opposite];
-    if (next >= 0) __builtin_prefetch(&tets[static_cast<std::size_t>(next >> 2)]);
-    double wd = edge_value(q[x], q[y]);
-    double wx = -e_d[y], wy = e_d[x];
-    const double w3[3] = {std::max(0.0, wd), std::max(0.0, wx), std::max(0.0, wy)};
-    double t_out = t_in, s_out = s_in;
-    if (w3[0] + w3[1] + w3[2] > 0) {
-      const detail::FacePoint fp = geo.interpolate(w3, q[0], q[x], q[y]);
-      t_out = fp.t;
-      s_out = fp.mu[0] * geo.scalar(id[0]) + fp.mu[1] * geo.scalar(id[x]) + fp.mu[2] * geo.scalar(id[y]);
-      if constexpr (kShaded) {
-        const std::int32_t face[3] = {id[0], id[x], id[y]};
-        shade->face_light(face, fp.mu, f.origin + f.d * t_out, l_out);
-      }
-    } else if constexpr (kShaded) {
-      for (int c = 0; c < 3; ++c) l_out[c] = l_in[c];
-    }
-    const int p_out = std::isnan(s_out) ? -1 : tf.piece_near(s_out, p_in);
-    if (t_out <= t_in) {
-      t_out = t_in;
-      if (++zero_steps > kMaxZeroLengthSteps) {
-        ++stats.aborted;
-        break;
-      }
     } else {
-      zero_steps = 0;
-      // Only the part in front of the origin counts (the eye may sit inside the mesh).
-      double t0 = t_in, s0 = s_in, clip = 0.0;
-      int p0 = p_in;
-      if (t0 < 0.0 && t_out > 0.0) {
-        clip = -t_in / (t_out - t_in);
-        s0 = s_in + (s_out - s_in) * clip;
-        t0 = 0.0;
-        p0 = std::isnan(s0) ? -1 : tf.piece(s0);
-      }
-      if (t_out > t0 && t0 >= 0.0) {
-        if constexpr (kShaded) {
-          // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
-          if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
-            const double phong = shade->phong(tet, f.d);
-            Modulation mod;
-            for (int c = 0; c < 3; ++c) {
-              mod.front[c] = (l_in[c] + (l_out[c] - l_in[c]) * clip) * phong;
-              mod.back[c] = l_out[c] * phong;
-            }
-            tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc, &mod);
+      q[j] = geo.at(id[j]);
+    }
+  }
+  double e_d[4];  // e(D, X) for X = A, B, C at 1..3
+  int pattern = 0;
+  for (int j = 1; j < 4; ++j) {
+    e_d[j] = edge_value(q[0], q[j]);
+    pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
+  }
+  const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
+  const int opposite = abc[5 - x - y];  // local index of the vertex not on the exit face
+  // Start fetching the next tet now so that the integration below hides the memory latency.
+  const std::int32_t next = w.next[opposite];
+  if (next >= 0) __builtin_prefetch(&tets[static_cast<std::size_t>(next >> 2)]);
+  double wd = edge_value(q[x], q[y]);
+  double wx = -e_d[y], wy = e_d[x];
+  const double w3[3] = {std::max(0.0, wd), std::max(0.0, wx), std::max(0.0, wy)};
+  double t_out = c.t_in, s_out = c.s_in;
+  double l_out[3] = {0, 0, 0};
+  if (w3[0] + w3[1] + w3[2] > 0) {
+    const detail::FacePoint fp = geo.interpolate(w3, q[0], q[x], q[y]);
+    t_out = fp.t;
+    s_out = fp.mu[0] * geo.scalar(id[0]) + fp.mu[1] * geo.scalar(id[x]) + fp.mu[2] * geo.scalar(id[y]);
+    if constexpr (kShaded) {
+      const std::int32_t face[3] = {id[0], id[x], id[y]};
+      shade->face_light(face, fp.mu, f.origin + f.d * t_out, l_out);
+    }
+  } else if constexpr (kShaded) {
+    for (int i = 0; i < 3; ++i) l_out[i] = c.l_in[i];
+  }
+  const int p_out = std::isnan(s_out) ? -1 : tf.piece_near(s_out, c.p_in);
+  if (t_out <= c.t_in) {
+    t_out = c.t_in;
+    if (++c.zero_steps > kMaxZeroLengthSteps) {
+      ++stats.aborted;
+      return false;
+    }
+  } else {
+    c.zero_steps = 0;
+    // Only the part in front of the origin counts (the eye may sit inside the mesh).
+    double t0 = c.t_in, s0 = c.s_in, clip = 0.0;
+    int p0 = c.p_in;
+    if (t0 < 0.0 && t_out > 0.0) {
+      clip = -c.t_in / (t_out - c.t_in);
+      s0 = c.s_in + (s_out - c.s_in) * clip;
+      t0 = 0.0;
+      p0 = std::isnan(s0) ? -1 : tf.piece(s0);
+    }
+    if (t_out > t0 && t0 >= 0.0) {
+      if constexpr (kShaded) {
+        // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
+        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
+          const double phong = shade->phong(c.tet, f.d);
+          Modulation mod;
+          for (int i = 0; i < 3; ++i) {
+            mod.front[i] = (c.l_in[i] + (l_out[i] - c.l_in[i]) * clip) * phong;
+            mod.back[i] = l_out[i] * phong;
           }
-          stats.length += t_out - t0;
-          ++stats.segments;
-          if (acc.transmittance < stop_transmittance) break;
-        } else {
-          pending[pending_count++] = {s0, s_out, t_out - t0, p0, p_out};
-          if (pending_count == kPendingSegments) {
-            const bool opaque = integrate_pending(tf, pending, pending_count, stop_transmittance, acc, stats);
-            pending_count = 0;
-            if (opaque) {
-              stopped = true;
-              break;
-            }
-          }
+          tf.integrate(s0, p0, s_out, p_out, t_out - t0, acc, &mod);
+        }
+        stats.length += t_out - t0;
+        ++stats.segments;
+        if (acc.transmittance < stop_transmittance) return false;
+      } else {
+        c.pending[c.pending_count++] = {s0, s_out, t_out - t0, p0, p_out};
+        if (c.pending_count == kPendingSegments) {
+          c.opaque = integrate_pending(tf, c.pending, c.pending_count, stop_transmittance, acc, stats);
+          c.pending_count = 0;
+          if (c.opaque) return false;
         }
       }
     }
-    t_in = t_out;
-    s_in = s_out;
-    p_in = p_out;
-    if constexpr (kShaded)
-      for (int c = 0; c < 3; ++c) l_in[c] = l_out[c];
-    if constexpr (Geometry::kReuseFace) {
-      face_id[0] = id[0];
-      face_id[1] = id[x];
-      face_id[2] = id[y];
-      face_q[0] = q[0];
-      face_q[1] = q[x];
-      face_q[2] = q[y];
-    }
-    if (next < 0) break;
-    tet = next >> 2;
-    k = next & 3;
-    if (step == tets.size()) ++stats.aborted;  // a straight line meets each tet only once
   }
-  if constexpr (!kShaded)
-    if (!stopped) integrate_pending(tf, pending, pending_count, stop_transmittance, acc, stats);
-  // A graze along the boundary (a few rounding units long) is not counted as an entry.
-  if (stats.length - length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
-  return t_in;
+  c.t_in = t_out;
+  c.s_in = s_out;
+  c.p_in = p_out;
+  if constexpr (kShaded)
+    for (int i = 0; i < 3; ++i) c.l_in[i] = l_out[i];
+  if constexpr (Geometry::kReuseFace) {
+    c.face_id[0] = id[0];
+    c.face_id[1] = id[x];
+    c.face_id[2] = id[y];
+    c.face_q[0] = q[0];
+    c.face_q[1] = q[x];
+    c.face_q[2] = q[y];
+  }
+  if (next < 0) return false;
+  c.tet = next >> 2;
+  c.k = next & 3;
+  if (c.steps++ == tets.size()) {  // a straight line meets each tet only once
+    ++stats.aborted;
+    return false;
+  }
+  return true;
 }
 
 template <class Geometry>
@@ -342,15 +413,86 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const
                                    Composite& acc, WalkStats& stats) const {
   find_entries(f, geo, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
+  WalkCursor c;
   for (const Entry& e : entries) {
     // An entry before the last exit lies on a stretch already walked (a grazing touch). The
     // slack keeps a re-entry at the same depth: in a non-conforming mesh (hanging nodes) the
     // walk leaves a big tet through an unmatched face and the small tets behind it are entered
     // through their own unmatched faces, whose depth may round a few ulps below the exit's.
     if (e.t < done - reentry_slack) continue;
-    done = shade != nullptr ? walk<true>(f, geo, tf, shade, e, stop_transmittance, acc, stats)
-                            : walk<false>(f, geo, tf, nullptr, e, stop_transmittance, acc, stats);
+    begin_walk(tf, e, stats, c);
+    if (shade != nullptr)
+      while (step<true>(f, geo, tf, shade, stop_transmittance, c, acc, stats)) {
+      }
+    else
+      while (step<false>(f, geo, tf, nullptr, stop_transmittance, c, acc, stats)) {
+      }
+    end_walk(tf, stop_transmittance, c, acc, stats);
+    done = c.t_in;
     if (acc.transmittance < stop_transmittance) break;
+  }
+}
+
+template <bool kShaded>
+void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int x1, int y1, RayJob* jobs,
+                                     Image& image) const {
+  const int width = x1 - x0, count = width * (y1 - y0);
+  int next_pixel = 0;
+  // Starts the next entry of `j` that is not behind its last exit; false when none is left.
+  auto next_walk = [&](RayJob& j) {
+    while (j.next_entry < j.entries.size()) {
+      const Entry& e = j.entries[j.next_entry++];
+      if (e.t < j.done - reentry_slack) continue;  // see trace_ray
+      begin_walk(fc.tf, e, j.stats, j.cursor);
+      return true;
+    }
+    return false;
+  };
+  auto finish = [&](const RayJob& j) {
+    float* px = image.pixel(j.x, j.y);
+    for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(j.acc.rgb[c]);
+    px[3] = static_cast<float>(1.0 - j.acc.transmittance);
+  };
+  // Fills a slot with the next pixel that has a walk to do (pixels without one are finished at
+  // once); false when the tile has no pixel left.
+  auto fill = [&](RayJob& j) {
+    while (next_pixel < count) {
+      j.x = x0 + next_pixel % width;
+      j.y = y0 + next_pixel / width;
+      ++next_pixel;
+      const Ray ray = fc.camera.primary_ray(fc.camera_frame, j.x, j.y);
+      j.frame = RayFrame(ray.origin, ray.direction);
+      const std::size_t b = static_cast<std::size_t>(j.y / fc.bin) * fc.bins_x + static_cast<std::size_t>(j.x / fc.bin);
+      const bool few = fc.bins.start[b + 1] - fc.bins.start[b] <= kMaxBinFaces;
+      const std::int32_t* faces = fc.bins.faces.data();
+      j.geo = ScreenGeometry(fc.screen, fc.basis, ray.direction, few ? faces + fc.bins.start[b] : nullptr,
+                             few ? faces + fc.bins.start[b + 1] : nullptr);
+      j.acc = Composite{};
+      j.stats = WalkStats{};
+      find_entries(j.frame, j.geo, fc.shade, j.entries);
+      j.next_entry = 0;
+      j.done = -std::numeric_limits<double>::infinity();
+      if (next_walk(j)) return true;
+      finish(j);
+    }
+    return false;
+  };
+  bool live[kRaysInFlight];
+  for (int s = 0; s < kRaysInFlight; ++s) live[s] = fill(jobs[s]);
+  for (;;) {
+    bool any = false;
+    for (int s = 0; s < kRaysInFlight; ++s) {
+      if (!live[s]) continue;
+      any = true;
+      RayJob& j = jobs[s];
+      if (step<kShaded>(j.frame, j.geo, fc.tf, fc.shade, fc.stop_transmittance, j.cursor, j.acc, j.stats)) continue;
+      end_walk(fc.tf, fc.stop_transmittance, j.cursor, j.acc, j.stats);
+      j.done = j.cursor.t_in;
+      if (j.acc.transmittance >= fc.stop_transmittance && next_walk(j)) continue;
+      finish(j);
+      live[s] = fill(j);
+    }
+    if (!any) break;
   }
 }
 
@@ -384,36 +526,38 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const int bins_x = (camera.width + bin - 1) / bin;
   const detail::ScreenBins bins =
       screen.empty() ? detail::ScreenBins{} : detail::bin_boundary_faces(m_impl->triangles, screen, camera, bin);
+  const FrameContext fc{camera, camera_frame, screen.data(), basis, bins, bin, bins_x,
+                        table, shaded ? &shade : nullptr, stop_transmittance};
+  std::atomic<long> dbg_segments{0}, dbg_entries{0}; std::atomic<double> dbg_len{0};
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
     std::vector<Entry> entries;
-    entries.reserve(64);
+    RayJob jobs[kRaysInFlight];
     for (std::size_t ti = begin; ti < end; ++ti) {
       const int x0 = static_cast<int>(ti % tiles_x) * tile, y0 = static_cast<int>(ti / tiles_x) * tile;
-      for (int y = y0; y < std::min(y0 + tile, camera.height); ++y)
-        for (int x = x0; x < std::min(x0 + tile, camera.width); ++x) {
+      const int x1 = std::min(x0 + tile, camera.width), y1 = std::min(y0 + tile, camera.height);
+      if (!screen.empty()) {
+        if (shaded)
+          m_impl->render_tile<true>(fc, x0, y0, x1, y1, jobs, image);
+        else
+          m_impl->render_tile<false>(fc, x0, y0, x1, y1, jobs, image);
+        continue;
+      }
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
           const Ray ray = camera.primary_ray(camera_frame, x, y);
           Composite acc;
           WalkStats stats;
           const RayFrame frame(ray.origin, ray.direction);
-          if (screen.empty()) {
-            m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
-                              shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
-          } else {
-            const std::size_t b = static_cast<std::size_t>(y / bin) * bins_x + static_cast<std::size_t>(x / bin);
-            const bool few = bins.start[b + 1] - bins.start[b] <= kMaxBinFaces;
-            const std::int32_t* faces = bins.faces.data();
-            m_impl->trace_ray(frame,
-                              ScreenGeometry(screen.data(), basis, ray.direction, few ? faces + bins.start[b] : nullptr,
-                                             few ? faces + bins.start[b + 1] : nullptr),
-                              table,
-                              shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
-          }
+          m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
+                            shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
+          dbg_segments += stats.segments; dbg_entries += stats.entries; dbg_len += stats.length;
           float* px = image.pixel(x, y);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
           px[3] = static_cast<float>(1.0 - acc.transmittance);
         }
     }
   });
+  fprintf(stderr, "DBG segments %ld entries %ld length %.9g\n", dbg_segments.load(), dbg_entries.load(), dbg_len.load());
   return image;
 }
 

@@ -35,6 +35,7 @@ struct Projected {
 struct RayFrame {
   Vec3d origin, d, u, v;
 
+  RayFrame() = default;
   RayFrame(const Vec3d& o, const Vec3d& unit_dir) : origin(o), d(unit_dir) {
     // Duff et al., "Building an orthonormal basis, revisited" (2017): branch-free, u x v = d.
     const double sign = std::copysign(1.0, d.z);

@@ -70,9 +70,9 @@ struct ScreenBasis {
 };
 
 struct ScreenGeometry {
-  const ScreenPoint* points;
-  double sx, sy;        // the ray's point on the image plane
-  double depth_scale;   // distance along the unit ray per unit of camera depth: 1 / (d . forward)
+  const ScreenPoint* points = nullptr;
+  double sx = 0, sy = 0;  // the ray's point on the image plane
+  double depth_scale = 0;  // distance along the unit ray per unit of camera depth: 1 / (d . forward)
   /// Boundary faces come from the frame's screen tiles: those whose projection may cover the
   /// ray's tile (a superset of the faces the ray crosses); from the BVH when faces_begin is null
   /// (a tile crowded with faces smaller than a pixel, where the BVH's logarithmic search wins).
@@ -81,6 +81,7 @@ struct ScreenGeometry {
   const std::int32_t* faces_end = nullptr;
   static constexpr bool kReuseFace = false;
 
+  ScreenGeometry() = default;
   ScreenGeometry(const ScreenPoint* pts, const ScreenBasis& basis, const Vec3d& unit_dir,
                  const std::int32_t* faces_first, const std::int32_t* faces_last)
       : points(pts), faces_begin(faces_first), faces_end(faces_last) {
