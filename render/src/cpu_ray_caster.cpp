@@ -3,8 +3,6 @@
 #include "penumbra/render/cpu_ray_caster.h"
 
 #include <algorithm>
-#include <atomic>
-#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -229,12 +227,16 @@ void CpuRayCaster::Impl::find_entries(const RayFrame& f, const Geometry& geo, co
     const BoundaryTriangle& tri = triangles[static_cast<std::size_t>(i)];
     Projected q[3];
     for (int j = 0; j < 3; ++j) q[j] = geo.at(tri.v[j]);
-    double e[3];  // e[j]: edge v[j] -> v[j+1]
-    for (int j = 0; j < 3; ++j) {
-      const int n = j == 2 ? 0 : j + 1;
-      e[j] = edge_value(q[j], q[n]);
-      // The ray enters through an outward face when it sees the face clockwise.
-      if (edge_sign(e[j], q[j], tri.v[j], q[n], tri.v[n]) >= 0) return;
+    // e[j]: edge v[j] -> v[j+1]. The ray enters through an outward face when it sees the face
+    // clockwise: every edge negative. Most listed faces miss the ray, so all three values are
+    // tested in one branch (three would each be mispredicted often), ties only when one is 0.
+    const double e[3] = {edge_value(q[0], q[1]), edge_value(q[1], q[2]), edge_value(q[2], q[0])};
+    if (!((e[0] <= 0) & (e[1] <= 0) & (e[2] <= 0))) return;
+    if ((e[0] == 0) | (e[1] == 0) | (e[2] == 0)) [[unlikely]] {
+      for (int j = 0; j < 3; ++j) {
+        const int n = j == 2 ? 0 : j + 1;
+        if (edge_sign(e[j], q[j], tri.v[j], q[n], tri.v[n]) >= 0) return;
+      }
     }
     // Barycentric weight of a vertex: the opposite edge's value.
     const double w[3] = {std::max(0.0, -e[1]), std::max(0.0, -e[2]), std::max(0.0, -e[0])};
@@ -519,16 +521,17 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const Camera::Frame camera_frame = camera.frame();
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
-  // Boundary faces binned by small screen tiles replace the per-ray BVH search: a bin of a few
-  // pixels holds only the faces that may cover it, a handful at any resolution where faces
-  // span a few pixels or more.
-  constexpr int bin = 4;
+  // Boundary faces binned by small screen tiles replace the per-ray BVH search: a bin of 2x2
+  // pixels holds only the faces whose boxes hold one of its pixel centres, a handful at any
+  // resolution. (Measured on a 1M-tet mesh at 512x512: 2x2 bins 8 % faster per frame than 4x4,
+  // whose rays test more faces that miss them, and 4 % faster than one bin per pixel, which
+  // lists the larger faces many more times.)
+  constexpr int bin = 2;
   const int bins_x = (camera.width + bin - 1) / bin;
   const detail::ScreenBins bins =
       screen.empty() ? detail::ScreenBins{} : detail::bin_boundary_faces(m_impl->triangles, screen, camera, bin);
   const FrameContext fc{camera, camera_frame, screen.data(), basis, bins, bin, bins_x,
                         table, shaded ? &shade : nullptr, stop_transmittance};
-  std::atomic<long> dbg_segments{0}, dbg_entries{0}; std::atomic<double> dbg_len{0};
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
     std::vector<Entry> entries;
     RayJob jobs[kRaysInFlight];
@@ -550,14 +553,12 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           const RayFrame frame(ray.origin, ray.direction);
           m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
                             shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
-          dbg_segments += stats.segments; dbg_entries += stats.entries; dbg_len += stats.length;
           float* px = image.pixel(x, y);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
           px[3] = static_cast<float>(1.0 - acc.transmittance);
         }
     }
   });
-  fprintf(stderr, "DBG segments %ld entries %ld length %.9g\n", dbg_segments.load(), dbg_entries.load(), dbg_len.load());
   return image;
 }
 

@@ -69,6 +69,18 @@ inline double attenuation_series(double a, double k) {
 /// Z(a, b) above for a, b >= 0: the series, truncated after order N where the remainder bound
 /// delta^(N+1)/(N+1)! (delta = a + |k| >= max D) is below ~1e-15, while delta <= 0.25 (the
 /// common case in a fine mesh, and the one where the closed forms cancel); closed forms beyond.
+/// Z(a, b) for delta = a + |b - a| / 2 > 0.02 (see attenuation_integral), out of line: thicker
+/// segments are rare in a fine mesh, and inlined their series would crowd the walk's hot code.
+[[gnu::noinline]] inline double attenuation_integral_thick(double a, double b) {
+  const double k = 0.5 * (b - a);
+  const double delta = a + std::fabs(k);
+  // Order N suffices while delta^(N+1)/(N+1)! < 1e-14.
+  if (delta <= 0.08) return attenuation_series<7>(a, k);
+  if (delta <= 0.14) return attenuation_series<8>(a, k);
+  if (delta <= 0.25) return attenuation_series<kSeriesOrder>(a, k);
+  return attenuation_integral_general(a, b);
+}
+
 inline double attenuation_integral(double a, double b) {
   const double k = 0.5 * (b - a);
   const double delta = a + std::fabs(k);
@@ -77,10 +89,7 @@ inline double attenuation_integral(double a, double b) {
     if (delta <= 1.2e-3) return attenuation_series<3>(a, k);
     return attenuation_series<5>(a, k);
   }
-  if (delta <= 0.08) return attenuation_series<7>(a, k);
-  if (delta <= 0.14) return attenuation_series<8>(a, k);
-  if (delta <= 0.25) return attenuation_series<kSeriesOrder>(a, k);
-  return attenuation_integral_general(a, b);
+  return attenuation_integral_thick(a, b);
 }
 
 /// Colour and transmittance of one linear piece, as above. `cf`/`cb` are front/back colours.
