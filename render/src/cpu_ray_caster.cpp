@@ -155,6 +155,12 @@ bool integrate_pending(const TfTable& tf, const PendingSegment* pending, int cou
 
 struct CpuRayCaster::Impl {
   std::shared_ptr<const TetMesh> mesh;
+  // The walk numbers the points in Morton order of their positions, as it orders the tets, so
+  // that the points a tile of rays reads lie close in memory whatever the mesh's numbering (a
+  // shuffled numbering costs about 15 % of a frame on a 1M-tet mesh): walk point i is the mesh's
+  // point point_ids[i], at points[i].
+  std::vector<std::int32_t> point_ids;
+  std::vector<Vec3d> points;
   std::vector<WalkTet> tets;
   std::vector<BoundaryTriangle> triangles;
   detail::Bvh bvh;
@@ -198,7 +204,16 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   const std::vector<std::int32_t> order = detail::morton_order(tm);
   std::vector<std::int32_t> rank(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
+  point_ids = detail::morton_point_order(tm);
+  std::vector<std::int32_t> point_rank(point_ids.size());
+  points.resize(point_ids.size());
+  for (std::size_t i = 0; i < point_ids.size(); ++i) {
+    point_rank[static_cast<std::size_t>(point_ids[i])] = static_cast<std::int32_t>(i);
+    points[i] = tm.points[static_cast<std::size_t>(point_ids[i])];
+  }
   tets = detail::walk_tets(tm, order);
+  for (WalkTet& w : tets)
+    for (std::int32_t& v : w.v) v = point_rank[static_cast<std::size_t>(v)];
   triangles.reserve(tm.boundary.size());
   std::vector<Bounds> boxes;
   boxes.reserve(tm.boundary.size());
@@ -207,8 +222,9 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
     BoundaryTriangle tri{};
     Bounds box;
     for (int j = 0; j < 3; ++j) {
-      tri.v[j] = tv[kFaceVertices[bf.face][j]];
-      box.extend(tm.points[static_cast<std::size_t>(tri.v[j])]);
+      const std::int32_t v = tv[kFaceVertices[bf.face][j]];
+      tri.v[j] = point_rank[static_cast<std::size_t>(v)];
+      box.extend(tm.points[static_cast<std::size_t>(v)]);
     }
     tri.tet = rank[static_cast<std::size_t>(bf.tet)];
     tri.face = bf.face;
@@ -510,14 +526,14 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const double stop_transmittance = opacity >= 1.0 ? 0.0 : 1.0 - opacity;
   const TfTable table(tf);
   const bool shaded = options.shading.model != LightingModel::none;
-  const ShadeContext shade = shaded ? detail::make_shade_context(m_impl->tets, m_impl->mesh->points, scalars.data(),
-                                                                 options.shading)
+  const ShadeContext shade = shaded ? detail::make_shade_context(m_impl->tets, m_impl->points, m_impl->point_ids.data(),
+                                                                 scalars.data(), options.shading)
                                     : ShadeContext{};
   Image image(camera.width, camera.height);
   // With the whole mesh in front of the eye, projections are shared by all rays of the frame.
   const ScreenBasis basis = detail::screen_basis(camera);
   const std::vector<ScreenPoint> screen =
-      detail::project_to_screen(basis, m_impl->mesh->points, scalars.data(), m_impl->mesh->bounds);
+      detail::project_to_screen(basis, m_impl->points, m_impl->point_ids.data(), scalars.data(), m_impl->mesh->bounds);
   const Camera::Frame camera_frame = camera.frame();
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
@@ -551,8 +567,8 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           Composite acc;
           WalkStats stats;
           const RayFrame frame(ray.origin, ray.direction);
-          m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table,
-                            shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
+          const RayGeometry geo{frame, m_impl->points.data(), m_impl->point_ids.data(), scalars.data()};
+          m_impl->trace_ray(frame, geo, table, shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
           float* px = image.pixel(x, y);
           for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
           px[3] = static_cast<float>(1.0 - acc.transmittance);
@@ -571,8 +587,8 @@ RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFu
   Composite acc;
   WalkStats stats;
   const RayFrame frame(ray.origin, ray.direction / len);
-  m_impl->trace_ray(frame, RayGeometry{frame, m_impl->mesh->points.data(), scalars.data()}, table, nullptr, 0.0,
-                    entries, acc, stats);
+  const RayGeometry geo{frame, m_impl->points.data(), m_impl->point_ids.data(), scalars.data()};
+  m_impl->trace_ray(frame, geo, table, nullptr, 0.0, entries, acc, stats);
   RayTrace r;
   for (int c = 0; c < 3; ++c) r.rgba[c] = acc.rgb[c];
   r.rgba[3] = 1.0 - acc.transmittance;

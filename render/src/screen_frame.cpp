@@ -19,8 +19,8 @@ ScreenBasis screen_basis(const Camera& camera) {
   return basis;
 }
 
-std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::vector<Vec3d>& pts, const float* scalars,
-                                          const Bounds& bounds) {
+std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::vector<Vec3d>& pts,
+                                          const std::int32_t* point_ids, const float* scalars, const Bounds& bounds) {
   std::vector<ScreenPoint> out(pts.size());
   // A point at (or behind) the eye plane has no screen position; a margin of 1e-9 of the mesh
   // size keeps 1/z finite and well away from overflow.
@@ -30,7 +30,7 @@ std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::
     bool ok = true;
     for (std::size_t i = b; i < e; ++i) {
       ok = ok && dot(pts[i] - basis.eye, basis.forward) > min_depth;
-      out[i] = basis.project(pts[i], scalars[i]);
+      out[i] = basis.project(pts[i], scalars[point_ids[i]]);
     }
     if (!ok) all_in_front = false;
   });

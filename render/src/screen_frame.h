@@ -14,10 +14,11 @@ namespace penumbra::render::detail {
 /// The screen frame of `camera` (same right and forward as Camera::primary_ray).
 ScreenBasis screen_basis(const Camera& camera);
 
-/// Screen coordinates and scalar of every point; empty when some point is not in front of the
-/// eye (by more than 1e-9 of the mesh size), in which case the frame must project per ray.
-std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::vector<Vec3d>& pts, const float* scalars,
-                                          const Bounds& bounds);
+/// Screen coordinates and scalar of every point, point i's scalar being scalars[point_ids[i]];
+/// empty when some point is not in front of the eye (by more than 1e-9 of the mesh size), in
+/// which case the frame must project per ray.
+std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::vector<Vec3d>& pts,
+                                          const std::int32_t* point_ids, const float* scalars, const Bounds& bounds);
 
 /// Boundary faces per screen tile of `tile` x `tile` pixels, row-major: those of tile i are
 /// faces[start[i]] .. faces[start[i + 1] - 1], every face whose projection may cover a pixel

@@ -7,9 +7,10 @@
 
 namespace penumbra::render::detail {
 
-ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vector<Vec3d>& pts, const float* scalars,
-                                const Shading& shading) {
+ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vector<Vec3d>& pts,
+                                const std::int32_t* point_ids, const float* scalars, const Shading& shading) {
   ShadeContext sc;
+  sc.point_ids = point_ids;
   sc.shading = shading;
   if (shading.model == LightingModel::light_volume && !shading.light_at) sc.light_rgb = shading.light_rgb->data();
   const double dl = length(shading.light_direction);
@@ -28,9 +29,10 @@ ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vec
       const Vec3d p0 = pts[static_cast<std::size_t>(w.v[0])];
       const Vec3d e1 = pts[static_cast<std::size_t>(w.v[1])] - p0, e2 = pts[static_cast<std::size_t>(w.v[2])] - p0,
                   e3 = pts[static_cast<std::size_t>(w.v[3])] - p0;
-      const double s0 = scalars[w.v[0]];
-      const Vec3d g = cross(e2, e3) * (scalars[w.v[1]] - s0) + cross(e3, e1) * (scalars[w.v[2]] - s0) +
-                      cross(e1, e2) * (scalars[w.v[3]] - s0);
+      auto scalar = [&](int k) -> double { return scalars[point_ids[w.v[k]]]; };
+      const double s0 = scalar(0);
+      const Vec3d g =
+          cross(e2, e3) * (scalar(1) - s0) + cross(e3, e1) * (scalar(2) - s0) + cross(e1, e2) * (scalar(3) - s0);
       const double gl = length(g);
       auto& n = sc.normals[i];
       if (std::isfinite(gl) && gl > 0) {

@@ -17,6 +17,7 @@ namespace penumbra::render::detail {
 struct ShadeContext {
   std::vector<std::array<float, 4>> normals;
   const float* light_rgb = nullptr;  // 3 per point, original point ids; null: L = 1
+  const std::int32_t* point_ids = nullptr;  // the mesh's id of each walk point id
   Shading shading;
   bool headlight = true;
   Vec3d to_light{0, 0, 0};
@@ -70,14 +71,15 @@ struct ShadeContext {
 
   void light_at(std::int32_t point, double out[3]) const {
     for (int c = 0; c < 3; ++c) {
-      const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point) + c] : 1.0f;
+      const float v = light_rgb ? light_rgb[3 * static_cast<std::size_t>(point_ids[point]) + c] : 1.0f;
       out[c] = std::isfinite(v) ? v : 0.0;
     }
   }
 };
 
-/// The shading state for `shading` (validated) over the walk tets `tets` of points `pts`.
-ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vector<Vec3d>& pts, const float* scalars,
-                                const Shading& shading);
+/// The shading state for `shading` (validated) over the walk tets `tets` of points `pts`; walk
+/// point i is the mesh's point point_ids[i], whose scalar is scalars[point_ids[i]].
+ShadeContext make_shade_context(const std::vector<WalkTet>& tets, const std::vector<Vec3d>& pts,
+                                const std::int32_t* point_ids, const float* scalars, const Shading& shading);
 
 }  // namespace penumbra::render::detail

@@ -31,6 +31,7 @@ struct FacePoint {
 struct RayGeometry {
   const RayFrame& frame;
   const Vec3d* points;
+  const std::int32_t* point_ids;  // the mesh's id of each point, which indexes `scalars`
   const float* scalars;
   /// Boundary faces come from the BVH along the ray.
   static constexpr bool kBinnedFaces = false;
@@ -39,7 +40,7 @@ struct RayGeometry {
   static constexpr bool kReuseFace = true;
 
   Projected at(std::int32_t id) const { return frame.project(points[id]); }
-  double scalar(std::int32_t id) const { return scalars[id]; }
+  double scalar(std::int32_t id) const { return scalars[point_ids[id]]; }
   /// `w`: the vertices' unnormalised barycentric weights (sum > 0) in the ray plane.
   FacePoint interpolate(const double w[3], const Projected& a, const Projected& b, const Projected& c) const {
     const double inv = 1.0 / (w[0] + w[1] + w[2]);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
 
 #include "scenes.h"
 
@@ -83,6 +84,48 @@ TEST(ScreenPath, TilesWhoseFacesAllCoverThePixelCentresUseTheBvh) {
   int covered = 0;
   EXPECT_LT(max_difference_to_traced_rays(owned, cam, covered), kTolerance);
   EXPECT_GT(covered, 30);
+}
+
+TEST(ScreenPath, PointNumberingDoesNotChangeThePicture) {
+  // The caster renumbers the points for the walk; a mesh whose points come in another order
+  // must give the same picture, lit (the light field is per mesh point id) and unlit.
+  const auto owned = fixtures::tet_block_with_hole(7);
+  fixtures::OwnedMesh shuffled = owned;
+  const std::size_t np = owned.point_count();
+  std::vector<std::int64_t> position(np);  // new id of each old point
+  for (std::size_t i = 0; i < np; ++i) position[i] = static_cast<std::int64_t>((i * 7919) % np);
+  ASSERT_EQ(std::gcd(std::size_t{7919}, np), 1u);
+  for (std::size_t i = 0; i < np; ++i)
+    for (int a = 0; a < 3; ++a) shuffled.xyz[3 * position[i] + a] = owned.xyz[3 * i + a];
+  for (auto& id : shuffled.connectivity) id = position[static_cast<std::size_t>(id)];
+  auto f = [](double x, double y, double z) { return std::sin(2.3 * x + 0.4) * std::cos(1.9 * y) + 0.5 * z - 0.3; };
+  const auto a_values = fixtures::sample(owned, f), b_values = fixtures::sample(shuffled, f);
+  const std::vector<float> a_scalars(a_values.begin(), a_values.end()), b_scalars(b_values.begin(), b_values.end());
+  std::vector<float> a_light(3 * np), b_light(3 * np);
+  for (std::size_t i = 0; i < np; ++i)
+    for (int c = 0; c < 3; ++c)
+      b_light[3 * position[i] + c] = a_light[3 * i + c] = static_cast<float>(0.3 + 0.2 * c + 0.5 * owned.xyz[3 * i]);
+  const auto a_mesh = test::prepare(owned), b_mesh = test::prepare(shuffled);
+  const render::CpuRayCaster a_caster(a_mesh), b_caster(b_mesh);
+  const auto cam = render::Camera::orbit(a_mesh->bounds, 37, 28, 35, 32, 32);
+  for (const bool lit : {false, true}) {
+    render::RenderOptions a_opts, b_opts;
+    if (lit) {
+      a_opts.shading.model = b_opts.shading.model = render::LightingModel::light_volume;
+      a_opts.shading.light_rgb = &a_light;
+      b_opts.shading.light_rgb = &b_light;
+    }
+    const render::Image a = a_caster.render(a_scalars, banded_tf(), cam, a_opts);
+    const render::Image b = b_caster.render(b_scalars, banded_tf(), cam, b_opts);
+    double worst = 0, alpha = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        alpha += a.pixel(x, y)[3];
+        for (int c = 0; c < 4; ++c) worst = std::max(worst, std::fabs(double{a.pixel(x, y)[c]} - b.pixel(x, y)[c]));
+      }
+    EXPECT_LT(worst, kTolerance) << (lit ? "lit" : "unlit");
+    EXPECT_GT(alpha, 100.0);
+  }
 }
 
 TEST(ScreenPath, HexMeshSplitIntoTetsMatchesPerRayWalk) {
