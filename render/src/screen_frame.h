@@ -21,8 +21,9 @@ std::vector<ScreenPoint> project_to_screen(const ScreenBasis& basis, const std::
                                           const std::int32_t* point_ids, const float* scalars, const Bounds& bounds);
 
 /// Boundary faces per screen tile of `tile` x `tile` pixels, row-major: those of tile i are
-/// faces[start[i]] .. faces[start[i + 1] - 1], every face whose projection may cover a pixel
-/// centre of the tile.
+/// faces[start[i]] .. faces[start[i + 1] - 1], every face through which the ray of a pixel
+/// centre of the tile may enter the mesh (a face turned away from the eye, or one whose box
+/// holds none of the tile's pixel centres, is left out).
 struct ScreenBins {
   std::vector<std::int32_t> start, faces;
 };
