@@ -45,6 +45,8 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   // likewise for Y (down the screen): invert that for each face's corners.
   const Camera::Frame frame = camera.frame();
   const double half_h = frame.half_height, half_w = frame.half_width;
+  const double to_px_x = 0.5 * camera.width / half_w, offset_x = 0.5 * camera.width - 0.5;
+  const double to_px_y = 0.5 * camera.height / half_h, offset_y = 0.5 * camera.height - 0.5;
   struct TileRange {
     int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
   };
@@ -67,10 +69,8 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
         continue;
       }
       double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
-      for (const std::int32_t v : triangles[i].v) {
-        const ScreenPoint& p = screen[static_cast<std::size_t>(v)];
-        const double px = (p.x / half_w + 1.0) * 0.5 * camera.width - 0.5;
-        const double py = (p.y / half_h + 1.0) * 0.5 * camera.height - 0.5;
+      for (const ScreenPoint* p : {&a, &b1, &c}) {
+        const double px = p->x * to_px_x + offset_x, py = p->y * to_px_y + offset_y;
         lo_x = std::min(lo_x, px);
         hi_x = std::max(hi_x, px);
         lo_y = std::min(lo_y, py);
