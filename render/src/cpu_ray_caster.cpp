@@ -118,6 +118,7 @@ struct RayJob {
 // independent rays, interleaved, give it work to overlap (8 rays: about 12 % faster than one on
 // a 1M-tet mesh; 16 gain nothing more).
 constexpr int kRaysInFlight = 8;
+constexpr int kPointLookahead = 2;
 
 // Front to back. Usually one or two entries: insertion sort.
 void sort_entries(std::vector<Entry>& out) {
@@ -333,10 +334,14 @@ template <bool kShaded, class Geometry>
     }
   }
   double e_d[4];  // e(D, X) for X = A, B, C at 1..3
-  int pattern = 0;
-  for (int j = 1; j < 4; ++j) {
-    e_d[j] = edge_value(q[0], q[j]);
-    pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
+  for (int j = 1; j < 4; ++j) e_d[j] = edge_value(q[0], q[j]);
+  int pattern = static_cast<int>(e_d[1] > 0) | static_cast<int>(e_d[2] > 0) << 1 | static_cast<int>(e_d[3] > 0) << 2;
+  // The ray meets an edge's line: decided by the tie rule. One product tests the three (an
+  // underflow to 0 only sends a rare step through the exact rule as well).
+  if (e_d[1] * e_d[2] * e_d[3] == 0.0) [[unlikely]] {
+    pattern = 0;
+    for (int j = 1; j < 4; ++j)
+      pattern |= static_cast<int>(detail::edge_positive(e_d[j], q[0], id[0], q[j], id[j])) << (j - 1);
   }
   const int x = kExitX[pattern], y = x == 3 ? 1 : x + 1;  // exit face (D, X, Y) by position
   const int opposite = abc[5 - x - y];  // local index of the vertex not on the exit face
@@ -359,7 +364,7 @@ template <bool kShaded, class Geometry>
   } else if constexpr (kShaded) {
     for (int i = 0; i < 3; ++i) l_out[i] = c.l_in[i];
   }
-  const int p_out = std::isnan(s_out) ? -1 : tf.piece_near(s_out, c.p_in);
+  const int p_out = tf.piece_near(s_out, c.p_in);
   if (t_out <= c.t_in) {
     t_out = c.t_in;
     if (++c.zero_steps > kMaxZeroLengthSteps) {
@@ -368,16 +373,19 @@ template <bool kShaded, class Geometry>
     }
   } else {
     c.zero_steps = 0;
-    // Only the part in front of the origin counts (the eye may sit inside the mesh).
+    // Only the part in front of the origin counts (the eye may sit inside the mesh; not with a
+    // geometry whose points all lie in front of it).
     double t0 = c.t_in, s0 = c.s_in, clip = 0.0;
     int p0 = c.p_in;
-    if (t0 < 0.0 && t_out > 0.0) {
-      clip = -c.t_in / (t_out - c.t_in);
-      s0 = c.s_in + (s_out - c.s_in) * clip;
-      t0 = 0.0;
-      p0 = std::isnan(s0) ? -1 : tf.piece(s0);
+    if constexpr (!Geometry::kInFront) {
+      if (t0 < 0.0 && t_out > 0.0) {
+        clip = -c.t_in / (t_out - c.t_in);
+        s0 = c.s_in + (s_out - c.s_in) * clip;
+        t0 = 0.0;
+        p0 = std::isnan(s0) ? -1 : tf.piece(s0);
+      }
     }
-    if (t_out > t0 && t0 >= 0.0) {
+    if (Geometry::kInFront || (t_out > t0 && t0 >= 0.0)) {
       if constexpr (kShaded) {
         // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
         if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
@@ -503,6 +511,13 @@ void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int
       if (!live[s]) continue;
       any = true;
       RayJob& j = jobs[s];
+      {
+        // The new point of the tet a later ray steps into next: its record was fetched one
+        // round ago (step's prefetch); the point is not known before.
+        const RayJob& later = jobs[(s + kPointLookahead) % kRaysInFlight];
+        const WalkTet& lt = tets[static_cast<std::size_t>(later.cursor.tet)];
+        __builtin_prefetch(&fc.screen[lt.v[later.cursor.k]]);
+      }
       if (step<kShaded>(j.frame, j.geo, fc.tf, fc.shade, fc.stop_transmittance, j.cursor, j.acc, j.stats)) continue;
       end_walk(fc.tf, fc.stop_transmittance, j.cursor, j.acc, j.stats);
       j.done = j.cursor.t_in;

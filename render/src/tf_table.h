@@ -31,6 +31,13 @@ public:
   explicit TfTable(const TransferFunction& tf) {
     m_x = tf.breakpoints();
     const std::size_t n = m_x.size();
+    // Bounds of piece p at p + 1; "piece" -1 (NaN) at 0 holds nothing.
+    m_lower.assign(n + 2, HUGE_VAL);
+    m_upper.assign(n + 2, -HUGE_VAL);
+    for (std::size_t p = 0; p <= n; ++p) {
+      m_lower[p + 1] = p == 0 ? -HUGE_VAL : m_x[p - 1];
+      m_upper[p + 1] = p == n ? HUGE_VAL : m_x[p];
+    }
     m_pieces.resize(n + 1);
     for (std::size_t p = 0; p <= n; ++p) {
       Piece& q = m_pieces[p];
@@ -63,15 +70,13 @@ public:
     return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin());
   }
 
-  /// piece(s), checking the piece `hint` (the previous sample's, usually the same) first.
+  /// The piece of s, -1 for NaN, checking the piece `hint` (the previous sample's, usually the
+  /// same; -1 allowed) first: two comparisons with the hint's bounds, which are -inf and +inf
+  /// at the ends and hold no s for hint -1, so no case is special.
   int piece_near(double s, int hint) const {
-    if (hint >= 0) {
-      const auto h = static_cast<std::size_t>(hint);
-      const bool above_lo = hint == 0 || s >= m_x[h - 1];
-      const bool below_hi = h == m_x.size() || s < m_x[h];
-      if (above_lo && below_hi) return hint;
-    }
-    return piece(s);
+    const auto h = static_cast<std::size_t>(hint + 1);
+    if (s >= m_lower[h] && s < m_upper[h]) return hint;
+    return std::isnan(s) ? -1 : piece(s);
   }
 
   /// True when the transfer function has zero extinction over the whole scalar range [lo, hi].
@@ -146,6 +151,7 @@ private:
   }
 
   std::vector<double> m_x;
+  std::vector<double> m_lower, m_upper;  // piece_near's bounds, piece p at p + 1
   std::vector<Piece> m_pieces;
 };
 

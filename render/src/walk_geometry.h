@@ -38,6 +38,8 @@ struct RayGeometry {
   /// The entry face's projections are reused on the next tet (projecting costs more than
   /// matching ids).
   static constexpr bool kReuseFace = true;
+  /// The ray may start inside the mesh: depths may be negative.
+  static constexpr bool kInFront = false;
 
   Projected at(std::int32_t id) const { return frame.project(points[id]); }
   double scalar(std::int32_t id) const { return scalars[point_ids[id]]; }
@@ -81,6 +83,8 @@ struct ScreenGeometry {
   const std::int32_t* faces_begin = nullptr;
   const std::int32_t* faces_end = nullptr;
   static constexpr bool kReuseFace = false;
+  /// Every point lies in front of the eye: every depth is positive.
+  static constexpr bool kInFront = true;
 
   ScreenGeometry() = default;
   ScreenGeometry(const ScreenPoint* pts, const ScreenBasis& basis, const Vec3d& unit_dir,
