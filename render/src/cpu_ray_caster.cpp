@@ -1,5 +1,5 @@
-// render/src/cpu_ray_caster.cpp -- boundary entries by BVH, tet walk by Plücker signs, exact
-// segment integration
+// render/src/cpu_ray_caster.cpp -- boundary entries by screen bins (or a BVH), tet walk by Plücker
+// signs, several rays in flight, exact segment integration
 #include "penumbra/render/cpu_ray_caster.h"
 
 #include <algorithm>
@@ -45,7 +45,7 @@ using detail::kExitX;
 struct Entry {
   double t, s;
   std::int32_t tet, face;
-  double light[3];  // L(x) at the entry point (shaded renders only)
+  double light[3] = {1, 1, 1};  // L(x) at the entry point (shaded renders only)
 };
 
 struct WalkStats {
@@ -84,6 +84,7 @@ struct WalkCursor {
   // Unshaded walks: segments walked and not yet integrated; `opaque` once the ray is.
   int pending_count = 0;
   bool opaque = false;
+  bool stuck = false;  // ended by too many zero-length steps: not counted as an entry
   PendingSegment pending[kPendingSegments];
 };
 
@@ -191,7 +192,7 @@ struct CpuRayCaster::Impl {
   // Renders the pixels of one tile in screen space, keeping kRaysInFlight rays walking side by
   // side (see RayJob).
   template <bool kShaded>
-  void render_tile(const FrameContext& frame, int x0, int y0, int x1, int y1, RayJob* jobs, Image& image) const;
+  void render_tile(const FrameContext& fc, int x0, int y0, int x1, int y1, RayJob* jobs, Image& image) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -300,6 +301,7 @@ void CpuRayCaster::Impl::begin_walk(const TfTable& tf, const Entry& entry, const
   c.face_id[0] = c.face_id[1] = c.face_id[2] = -1;
   c.pending_count = 0;
   c.opaque = false;
+  c.stuck = false;
 }
 
 void CpuRayCaster::Impl::end_walk(const TfTable& tf, double stop_transmittance, WalkCursor& c, Composite& acc,
@@ -308,7 +310,7 @@ void CpuRayCaster::Impl::end_walk(const TfTable& tf, double stop_transmittance, 
     c.opaque = integrate_pending(tf, c.pending, c.pending_count, stop_transmittance, acc, stats);
   c.pending_count = 0;
   // A graze along the boundary (a few rounding units long) is not counted as an entry.
-  if (stats.length - c.length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
+  if (!c.stuck && stats.length - c.length_before > kGrazeLength * mesh->bounds.diagonal()) ++stats.entries;
 }
 
 template <bool kShaded, class Geometry>
@@ -369,6 +371,7 @@ template <bool kShaded, class Geometry>
     t_out = c.t_in;
     if (++c.zero_steps > kMaxZeroLengthSteps) {
       ++stats.aborted;
+      c.stuck = true;
       return false;
     }
   } else {

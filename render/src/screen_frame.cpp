@@ -48,7 +48,7 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   const double to_px_x = 0.5 * camera.width / half_w, offset_x = 0.5 * camera.width - 0.5;
   const double to_px_y = 0.5 * camera.height / half_h, offset_y = 0.5 * camera.height - 0.5;
   struct TileRange {
-    int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen
+    int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen or never entered
   };
   std::vector<TileRange> ranges(triangles.size());
   parallel_for(triangles.size(), 1 << 12, [&](std::size_t b, std::size_t e) {

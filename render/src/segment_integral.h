@@ -66,9 +66,6 @@ inline double attenuation_series(double a, double k) {
   return sum;
 }
 
-/// Z(a, b) above for a, b >= 0: the series, truncated after order N where the remainder bound
-/// delta^(N+1)/(N+1)! (delta = a + |k| >= max D) is below ~1e-15, while delta <= 0.25 (the
-/// common case in a fine mesh, and the one where the closed forms cancel); closed forms beyond.
 /// Z(a, b) for delta = a + |b - a| / 2 > 0.02 (see attenuation_integral), out of line: thicker
 /// segments are rare in a fine mesh, and inlined their series would crowd the walk's hot code.
 [[gnu::noinline]] inline double attenuation_integral_thick(double a, double b) {
@@ -81,6 +78,9 @@ inline double attenuation_series(double a, double k) {
   return attenuation_integral_general(a, b);
 }
 
+/// Z(a, b) above for a, b >= 0: the series, truncated after order N where the remainder bound
+/// delta^(N+1)/(N+1)! (delta = a + |k| >= max D) is below ~1e-15, while delta <= 0.25 (the
+/// common case in a fine mesh, and the one where the closed forms cancel); closed forms beyond.
 inline double attenuation_integral(double a, double b) {
   const double k = 0.5 * (b - a);
   const double delta = a + std::fabs(k);

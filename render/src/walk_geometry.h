@@ -76,9 +76,10 @@ struct ScreenGeometry {
   const ScreenPoint* points = nullptr;
   double sx = 0, sy = 0;  // the ray's point on the image plane
   double depth_scale = 0;  // distance along the unit ray per unit of camera depth: 1 / (d . forward)
-  /// Boundary faces come from the frame's screen tiles: those whose projection may cover the
-  /// ray's tile (a superset of the faces the ray crosses); from the BVH when faces_begin is null
-  /// (a tile crowded with faces smaller than a pixel, where the BVH's logarithmic search wins).
+  /// Boundary faces come from the frame's screen tiles: those facing the eye whose boxes hold a
+  /// pixel centre of the ray's tile (a superset of the faces the ray enters through); from the
+  /// BVH when faces_begin is null (a tile crowded with such faces, where the BVH's logarithmic
+  /// search wins).
   static constexpr bool kBinnedFaces = true;
   const std::int32_t* faces_begin = nullptr;
   const std::int32_t* faces_end = nullptr;

@@ -277,7 +277,7 @@ private:
     return Rays::kSnaps && std::fabs(e) <= noise(a, b) ? 0.0 : e;
   }
   static double noise(const Projected& a, const Projected& b) {
-    return kSnap * (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y);
+    return kSnap * ((a.x * a.x + a.y * a.y) + (b.x * b.x + b.y * b.y));  // grouped: exactly symmetric
   }
 
   // The start: whether the ray leaves through the face opposite v (outward order), i.e. all its

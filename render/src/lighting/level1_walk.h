@@ -58,7 +58,7 @@ struct WalkInput {
 ///
 /// The walk is the renderer's (cpu_ray_caster.cpp): each step leaves the tet through the face
 /// whose edges the ray passes on the inside, decided by the signs of 2D cross products in the
-/// plane across the ray, each edge's value computed in one canonical direction and exact zeros
+/// plane across the ray, each edge's value exactly the negative of its reverse's and exact zeros
 /// broken by one consistent perturbation of the ray (ray_frame.h). Through vertices, along edges
 /// and in face planes it therefore walks as a nearby generic ray would, never losing or doubling
 /// a tet. The start is the tet of v's star whose face opposite v the ray leaves through (the
