@@ -121,6 +121,12 @@ struct RayJob {
 constexpr int kRaysInFlight = 8;
 constexpr int kPointLookahead = 2;
 
+// A ray's composite as an image pixel: premultiplied colour and opacity.
+void store_pixel(const Composite& acc, float* px) {
+  for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
+  px[3] = static_cast<float>(1.0 - acc.transmittance);
+}
+
 // Front to back. Usually one or two entries: insertion sort.
 void sort_entries(std::vector<Entry>& out) {
   for (std::size_t i = 1; i < out.size(); ++i)
@@ -143,9 +149,7 @@ bool integrate_pending(const TfTable& tf, const PendingSegment* pending, int cou
                        Composite& acc, WalkStats& stats) {
   for (int i = 0; i < count; ++i) {
     const PendingSegment& g = pending[i];
-    // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
-    if (g.p1 >= 0 && g.p0 >= 0 && !(g.p0 == g.p1 && tf.piece_empty(g.p0)))
-      tf.integrate(g.s0, g.p0, g.s1, g.p1, g.length, acc);
+    if (tf.emits(g.p0, g.p1)) tf.integrate(g.s0, g.p0, g.s1, g.p1, g.length, acc);
     stats.length += g.length;
     ++stats.segments;
     if (acc.transmittance < stop_transmittance) return true;
@@ -293,7 +297,7 @@ void CpuRayCaster::Impl::begin_walk(const TfTable& tf, const Entry& entry, const
   c.k = entry.face;
   c.t_in = entry.t;
   c.s_in = entry.s;
-  c.p_in = std::isnan(entry.s) ? -1 : tf.piece(entry.s);
+  c.p_in = tf.piece_or_nan(entry.s);
   for (int i = 0; i < 3; ++i) c.l_in[i] = entry.light[i];
   c.zero_steps = 0;
   c.steps = 0;
@@ -385,13 +389,12 @@ template <bool kShaded, class Geometry>
         clip = -c.t_in / (t_out - c.t_in);
         s0 = c.s_in + (s_out - c.s_in) * clip;
         t0 = 0.0;
-        p0 = std::isnan(s0) ? -1 : tf.piece(s0);
+        p0 = tf.piece_or_nan(s0);
       }
     }
     if (Geometry::kInFront || (t_out > t0 && t0 >= 0.0)) {
       if constexpr (kShaded) {
-        // Skips NaN ends (a cell with no data) and stretches of zero extinction cheaply.
-        if (p_out >= 0 && p0 >= 0 && !(p0 == p_out && tf.piece_empty(p0))) {
+        if (tf.emits(p0, p_out)) {
           const double phong = shade->phong(c.tet, f.d);
           Modulation mod;
           for (int i = 0; i < 3; ++i) {
@@ -477,11 +480,7 @@ void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int
     }
     return false;
   };
-  auto finish = [&](const RayJob& j) {
-    float* px = image.pixel(j.x, j.y);
-    for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(j.acc.rgb[c]);
-    px[3] = static_cast<float>(1.0 - j.acc.transmittance);
-  };
+  auto finish = [&](const RayJob& j) { store_pixel(j.acc, image.pixel(j.x, j.y)); };
   // Fills a slot with the next pixel that has a walk to do (pixels without one are finished at
   // once); false when the tile has no pixel left.
   auto fill = [&](RayJob& j) {
@@ -587,9 +586,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           const RayFrame frame(ray.origin, ray.direction);
           const RayGeometry geo{frame, m_impl->points.data(), m_impl->point_ids.data(), scalars.data()};
           m_impl->trace_ray(frame, geo, table, shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
-          float* px = image.pixel(x, y);
-          for (int c = 0; c < 3; ++c) px[c] = static_cast<float>(acc.rgb[c]);
-          px[3] = static_cast<float>(1.0 - acc.transmittance);
+          store_pixel(acc, image.pixel(x, y));
         }
     }
   });

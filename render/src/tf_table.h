@@ -70,13 +70,16 @@ public:
     return static_cast<int>(std::upper_bound(m_x.begin(), m_x.end(), s) - m_x.begin());
   }
 
-  /// The piece of s, -1 for NaN, checking the piece `hint` (the previous sample's, usually the
+  /// The piece of s, -1 for NaN (a point with no data).
+  int piece_or_nan(double s) const { return std::isnan(s) ? -1 : piece(s); }
+
+  /// piece_or_nan(s), checking the piece `hint` (the previous sample's, usually the
   /// same; -1 allowed) first: two comparisons with the hint's bounds, which are -inf and +inf
   /// at the ends and hold no s for hint -1, so no case is special.
   int piece_near(double s, int hint) const {
     const auto h = static_cast<std::size_t>(hint + 1);
     if (s >= m_lower[h] && s < m_upper[h]) return hint;
-    return std::isnan(s) ? -1 : piece(s);
+    return piece_or_nan(s);
   }
 
   /// True when the transfer function has zero extinction over the whole scalar range [lo, hi].
@@ -89,6 +92,10 @@ public:
 
   /// True when piece p has zero extinction throughout.
   bool piece_empty(int p) const { return m_pieces[static_cast<std::size_t>(p)].empty; }
+
+  /// Whether a segment from piece p0 to piece p1 (-1: a NaN end) can add anything: not with a
+  /// NaN end (a cell with no data) nor within one piece of zero extinction, skipped cheaply.
+  bool emits(int p0, int p1) const { return p0 >= 0 && p1 >= 0 && !(p0 == p1 && piece_empty(p0)); }
 
   /// Composites the segment of `length` whose scalar runs linearly from s0 (front) to s1
   /// (back) onto `acc`, exactly (see segment_integral.h). NaN ends make the segment empty.
