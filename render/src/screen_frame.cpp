@@ -50,6 +50,7 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
   struct TileRange {
     int x0, x1, y0, y1;  // inclusive; x0 > x1 when off screen or never entered
   };
+  constexpr TileRange kNowhere{0, -1, 0, -1};
   std::vector<TileRange> ranges(triangles.size());
   parallel_for(triangles.size(), 1 << 12, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
@@ -65,7 +66,7 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
       const double area2 = (b1.x - a.x) * (c.y - a.y) - (b1.y - a.y) * (c.x - a.x);
       const double scale = a.x * a.x + a.y * a.y + b1.x * b1.x + b1.y * b1.y + c.x * c.x + c.y * c.y;
       if (area2 > 1e-9 * scale) {
-        r = {0, -1, 0, -1};
+        r = kNowhere;
         continue;
       }
       double lo_x = HUGE_VAL, hi_x = -HUGE_VAL, lo_y = HUGE_VAL, hi_y = -HUGE_VAL;
@@ -91,7 +92,7 @@ ScreenBins bin_boundary_faces(const std::vector<BoundaryTriangle>& triangles, co
       const int cx0 = first_centre(lo_x, camera.width), cx1 = last_centre(hi_x, camera.width);
       const int cy0 = first_centre(lo_y, camera.height), cy1 = last_centre(hi_y, camera.height);
       if (cx0 > cx1 || cy0 > cy1) {
-        r = {0, -1, 0, -1};
+        r = kNowhere;
         continue;
       }
       r = {cx0 / tile, cx1 / tile, cy0 / tile, cy1 / tile};
