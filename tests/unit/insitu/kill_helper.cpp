@@ -25,7 +25,10 @@ int main(int argc, char** argv) {
   pnb_mesh_desc m{mesh.xyz.data(), static_cast<int64_t>(mesh.point_count()), 0, PNB_FLOAT64,
                   mesh.connectivity.data(), static_cast<int64_t>(mesh.connectivity.size()), mesh.offsets.data(),
                   PNB_INT64, mesh.types.data(), static_cast<int64_t>(mesh.types.size()), 1};
-  if (pnb_publish_mesh(ctx, &m, PNB_BORROW) != PNB_OK) return 1;
+  if (pnb_publish_mesh(ctx, &m, PNB_BORROW) != PNB_OK) {
+    std::fprintf(stderr, "%s\n", pnb_last_error(ctx));
+    return 1;
+  }
   const long first = std::atol(argv[2]), steps = std::atol(argv[3]);
   for (long c = first; c < first + steps; ++c) {
     const double t = 0.01 * static_cast<double>(c);
