@@ -224,14 +224,31 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
 }
 
 // Writes the exceptions of a patched lane over its unpacked slots (in-range positions only).
+// An entry (position, then value: at most 10 + 31 bits) is one 8-byte read after a shift of at
+// most 7; the payload's 8 bytes of padding cover the last.
 template <class Chunk>
 void patch_lane(const std::uint8_t* data, std::uint64_t at, std::uint32_t exceptions, std::uint32_t exception_width,
                 std::uint32_t count, std::uint64_t lane, Chunk& c) {
   const std::uint32_t pb = position_bits(count);
+  const std::uint64_t position_mask = (1ull << pb) - 1, value_mask = (1ull << exception_width) - 1;
+  std::uint32_t* z = c.z.data() + lane;
   for (std::uint32_t x = 0; x < exceptions; ++x, at += pb + exception_width) {
-    const std::uint32_t i = read_bits(data, at, pb);
-    if (i < count) c.z[i * Chunk::kLanesPerChunk + lane] = read_bits(data, at + pb, exception_width);
+    std::uint64_t word;
+    std::memcpy(&word, data + (at >> 3), 8);
+    word >>= at & 7;
+    const auto i = static_cast<std::uint32_t>(word & position_mask);
+    if (i < count) z[std::uint64_t(i) * Chunk::kLanesPerChunk] = static_cast<std::uint32_t>((word >> pb) & value_mask);
   }
+}
+
+// This thread's chunk. Out of line on purpose: in a shared library the address of a
+// thread_local is a call to __tls_get_addr, and GCC recomputes it at every use of the variable,
+// even through a reference bound once, rather than keep it in a register (14 % of a predictive
+// decode's instructions). A reference returned by a call it cannot see into is kept.
+template <std::uint64_t kWidth>
+[[gnu::noinline]] WindowChunk<kWidth>& thread_chunk() {
+  thread_local WindowChunk<kWidth> chunk;
+  return chunk;
 }
 
 // Parses the 8 sections from vertex v (once per vertex-window) and unpacks their `count` values
@@ -241,7 +258,7 @@ void patch_lane(const std::uint8_t* data, std::uint64_t at, std::uint32_t except
 // values start, the predictor and k_0 of a predictive page, and the 13-bit header of a patched
 // section (value_layout.h), whose exceptions are then written over the unpacked slots lane by
 // lane. Parsed one lane at a time, its read_bits were a fifth of a predictive decode's
-// instructions (callgrind, mug); in lanes, with the thread_local below looked up once, a whole
+// instructions (callgrind, mug); in lanes, with the thread's chunk looked up once, a whole
 // predictive window decodes 12-18 % faster (mug, eeg, smooth at 1e-3) and a residual one 3-6 %.
 // Most sections are patched (3 in 4 on mug, 1 in 2 on eeg), so a plain-only path would rarely
 // apply.
@@ -329,10 +346,7 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
   const std::uint32_t n = p.step_count;
   const __m256 step = _mm256_set1_ps(p.step);
   constexpr std::uint64_t kChunkLanes = kResidualChunk;
-  // One lookup of the thread's chunk per call: in a shared library every use of a thread_local
-  // by name is a call to __tls_get_addr (9 % of a predictive decode's instructions before).
-  thread_local WindowChunk<kChunkLanes> chunk;
-  WindowChunk<kChunkLanes>& c = chunk;
+  WindowChunk<kChunkLanes>& c = thread_chunk<kChunkLanes>();
   c.z.resize(std::size_t(n) * kChunkLanes);
   for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
     const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
@@ -361,10 +375,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
   const std::uint32_t n = p.step_count;
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   constexpr std::uint64_t kChunkLanes = kPredictiveChunk;
-  // One lookup of the thread's chunk per call: in a shared library every use of a thread_local
-  // by name is a call to __tls_get_addr (9 % of a predictive decode's instructions before).
-  thread_local WindowChunk<kChunkLanes> chunk;
-  WindowChunk<kChunkLanes>& c = chunk;
+  WindowChunk<kChunkLanes>& c = thread_chunk<kChunkLanes>();
   c.z.resize(std::size_t(n) * kChunkLanes);
   for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
     const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
