@@ -2,20 +2,12 @@
 // decode_step and StepCursor, which add a residual on top of it.
 #pragma once
 #include <cstdint>
-#include <vector>
 
 #include "penumbra/compression/encoded_page.h"
 
 namespace penumbra::compression::detail {
 
-/// Column t of a plain-VQ page's two codebooks (2 x K floats); empty for aligned pages.
-struct StepTables {
-  std::vector<float> t8, tw;
-};
-StepTables step_tables(const EncodedPage& p, std::uint32_t t);
-
 /// Step t of the VQ part (mean + D8 + D_W, or the aligned level + entry) for vertices [b, e).
-void vq_base_step(const EncodedPage& p, std::uint32_t t, const StepTables& tables, std::uint64_t b, std::uint64_t e,
-                  float* out);
+void vq_base_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out);
 
 }  // namespace penumbra::compression::detail

@@ -135,9 +135,8 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
     detail::seek(p, t, s);
   }
   detail::CursorState& s = *m_state;
-  const detail::StepTables tables = detail::step_tables(p, t);
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
-    if (!predictive) detail::vq_base_step(p, t, tables, b, e, out);
+    if (!predictive) detail::vq_base_step(p, t, b, e, out);
     std::uint64_t v = b;
     if (detail::lanes_active()) {
       v = b + (e - b) / detail::kLanes * detail::kLanes;

@@ -15,13 +15,19 @@ PNB_LANES __m256 means8(__m256 lo, __m256 scale, const std::uint16_t* q) {
 
 PNB_LANES __m256 lookup(const float* table, __m256i index) { return _mm256_i32gather_ps(table, index, 4); }
 
+// Row indices times the row length: D8 rows are 8 floats (a shift), D_W rows `stride`.
+PNB_LANES __m256i rows8(const std::uint8_t* index) { return _mm256_slli_epi32(widen8(index), 3); }
+PNB_LANES __m256i rows(const std::uint8_t* index, __m256i stride) { return _mm256_mullo_epi32(widen8(index), stride); }
+
 // The whole lane blocks of [0, count); the caller finishes the rest with scalar code.
 std::uint64_t lane_part(std::uint64_t count) { return lanes_active() ? count / kLanes * kLanes : 0; }
 
-__attribute__((target("avx2"))) void add_entries_lanes(const float* table, const std::uint8_t* index,
-                                                       const float* base, std::uint64_t count, float* out) {
+__attribute__((target("avx2"))) void add_entries_lanes(const float* table, std::int32_t stride,
+                                                       const std::uint8_t* index, const float* base,
+                                                       std::uint64_t count, float* out) {
+  const __m256i d = _mm256_set1_epi32(stride);
   for (std::uint64_t i = 0; i < count; i += kLanes)
-    store(out + i, _mm256_add_ps(load(base + i), lookup(table, widen8(index + i))));
+    store(out + i, _mm256_add_ps(load(base + i), lookup(table, rows(index + i, d))));
 }
 
 __attribute__((target("avx2"))) void add_offsets_lanes(const float* table, const std::int32_t* offset,
@@ -37,16 +43,18 @@ __attribute__((target("avx2"))) void mean_plus_entries_lanes(float lo, float sca
                                                              std::uint64_t count, float* out) {
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   for (std::uint64_t i = 0; i < count; i += kLanes)
-    store(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, widen8(i8 + i))));
+    store(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, rows8(i8 + i))));
 }
 
 __attribute__((target("avx2"))) void vq_step_values_lanes(float lo, float scale, const std::uint16_t* mean_q,
                                                           const float* t8, const std::uint8_t* i8, const float* tw,
-                                                          const std::uint8_t* iw, std::uint64_t count, float* out) {
+                                                          std::int32_t stride, const std::uint8_t* iw,
+                                                          std::uint64_t count, float* out) {
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
+  const __m256i d = _mm256_set1_epi32(stride);
   for (std::uint64_t i = 0; i < count; i += kLanes) {
-    const __m256 base = _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, widen8(i8 + i)));
-    store(out + i, _mm256_add_ps(base, lookup(tw, widen8(iw + i))));
+    const __m256 base = _mm256_add_ps(means8(l, s, mean_q + i), lookup(t8, rows8(i8 + i)));
+    store(out + i, _mm256_add_ps(base, lookup(tw, rows(iw + i, d))));
   }
 }
 
@@ -64,10 +72,11 @@ __attribute__((target("avx2"))) void aligned_step_values_lanes(float lo, float s
 
 }  // namespace
 
-void add_entries(const float* table, const std::uint8_t* index, const float* base, std::uint64_t count, float* out) {
+void add_entries(const float* table, std::int32_t stride, const std::uint8_t* index, const float* base,
+                 std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
-  if (i) add_entries_lanes(table, index, base, i, out);
-  for (; i < count; ++i) out[i] = base[i] + table[index[i]];
+  if (i) add_entries_lanes(table, stride, index, base, i, out);
+  for (; i < count; ++i) out[i] = base[i] + table[std::ptrdiff_t(index[i]) * stride];
 }
 
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out) {
@@ -80,14 +89,16 @@ void mean_plus_entries(float lo, float scale, const std::uint16_t* mean_q, const
                        std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
   if (i) mean_plus_entries_lanes(lo, scale, mean_q, t8, i8, i, out);
-  for (; i < count; ++i) out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i]];
+  for (; i < count; ++i) out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[std::ptrdiff_t(i8[i]) * 8];
 }
 
 void vq_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
-                    const float* tw, const std::uint8_t* iw, std::uint64_t count, float* out) {
+                    const float* tw, std::int32_t stride, const std::uint8_t* iw, std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
-  if (i) vq_step_values_lanes(lo, scale, mean_q, t8, i8, tw, iw, i, out);
-  for (; i < count; ++i) out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[i8[i]], tw[iw[i]]);
+  if (i) vq_step_values_lanes(lo, scale, mean_q, t8, i8, tw, stride, iw, i, out);
+  for (; i < count; ++i)
+    out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[std::ptrdiff_t(i8[i]) * 8],
+                      tw[std::ptrdiff_t(iw[i]) * stride]);
 }
 
 void aligned_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* table,

@@ -9,20 +9,26 @@
 
 namespace penumbra::compression::detail {
 
-/// out[i] = base[i] + table[index[i]] for i < count (a D_W lookup of a full-window decode).
-void add_entries(const float* table, const std::uint8_t* index, const float* base, std::uint64_t count, float* out);
+/// out[i] = base[i] + table[index[i] * stride] for i < count (a D_W lookup of a full-window
+/// decode: `table` is the codebook at the step's column, `stride` its row length).
+void add_entries(const float* table, std::int32_t stride, const std::uint8_t* index, const float* base,
+                 std::uint64_t count, float* out);
 
 /// out[i] = level[i] + table[offset[i]] (an aligned page's full-window decode).
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out);
 
-/// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i]] (mean + D8 of a block of steps).
+/// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i] * 8] (mean + D8 of a block of steps;
+/// `t8` is the D8 codebook at the block's column).
 void mean_plus_entries(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
                        std::uint64_t count, float* out);
 
-/// out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[i8[i]], tw[iw[i]]): one step of
-/// a plain-VQ page.
+/// out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[i8[i] * 8], tw[iw[i] * stride]):
+/// one step of a plain-VQ page (`t8`, `tw`: the codebooks at the step's columns, `stride` the
+/// D_W codebook's row length). The lookups read the codebooks in place: copying a step's
+/// columns out first (2 K strided reads and two allocations per step) had cost more than the
+/// decode of a small page itself.
 void vq_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
-                    const float* tw, const std::uint8_t* iw, std::uint64_t count, float* out);
+                    const float* tw, std::int32_t stride, const std::uint8_t* iw, std::uint64_t count, float* out);
 
 /// out[i] = aligned_value(dequantise_mean(lo, scale, mean_q[i]), table[ia[i] * stride - shift[i]]):
 /// one step of an aligned page (`table` already points at the step's frame position).

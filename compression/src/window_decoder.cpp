@@ -169,24 +169,10 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
 }
 
 
-StepTables step_tables(const EncodedPage& p, std::uint32_t t) {
-  StepTables tables;
-  if (!is_vq(p)) return tables;
-  const std::uint32_t K = p.codebook_size, block = p.window / 8;
-  tables.t8.resize(K);
-  tables.tw.resize(K);
-  for (std::uint32_t e = 0; e < K; ++e) {
-    tables.t8[e] = p.c8[std::size_t(e) * 8 + t / block];
-    tables.tw[e] = p.cw[std::size_t(e) * p.window + t];
-  }
-  return tables;
-}
-
-void vq_base_step(const EncodedPage& p, std::uint32_t t, const StepTables& tables, std::uint64_t b, std::uint64_t e,
-                  float* out) {
+void vq_base_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
   if (is_vq(p))
-    vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, tables.t8.data(), p.i8.data() + b, tables.tw.data(),
-                   p.iw.data() + b, e - b, out + b);
+    vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data() + t / (p.window / 8), p.i8.data() + b,
+                   p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, e - b, out + b);
   else  // each vertex reads its aligned entry at frame position t + W - 1 - shift
     aligned_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.ca.data() + (p.window - 1 + t),
                         p.ia.data() + b, p.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
@@ -204,11 +190,10 @@ void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
                  [&](std::size_t b, std::size_t e) { detail::predictive_step_range(p, t, b, e, out); });
     return;
   }
-  const detail::StepTables tables = detail::step_tables(p, t);
   // VQ base and residual in one pass per chunk, while the chunk's outputs are in cache.
   const std::size_t chunk = has_residual(p) ? kStepChunk / 8 : is_vq(p) ? kStepChunk : kStepChunk / 4;
   parallel_for(N, chunk, [&](std::size_t b, std::size_t e) {
-    detail::vq_base_step(p, t, tables, b, e, out);
+    detail::vq_base_step(p, t, b, e, out);
     if (has_residual(p)) residual_step_range(p, t, b, e, out);
   });
 }
@@ -219,16 +204,6 @@ void decode_window(const EncodedPage& p, float* out) {
   const std::uint32_t n = p.step_count;
   // Chunks of whole groups: each writes its vertex range of every step row.
   constexpr std::uint64_t kChunk = kGroup * 64;
-  std::vector<float> tables;
-  if (is_vq(p)) {
-    // Both codebook columns of every step, computed once: 2 x K floats per step.
-    tables.resize(std::size_t(n) * 2 * p.codebook_size);
-    for (std::uint32_t t = 0; t < n; ++t) {
-      const detail::StepTables column = detail::step_tables(p, t);
-      std::copy(column.t8.begin(), column.t8.end(), tables.begin() + std::size_t(t) * 2 * p.codebook_size);
-      std::copy(column.tw.begin(), column.tw.end(), tables.begin() + (std::size_t(t) * 2 + 1) * p.codebook_size);
-    }
-  }
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     if (is_vq(p)) {
       // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
@@ -237,10 +212,11 @@ void decode_window(const EncodedPage& p, float* out) {
       base.resize(e - b);
       const std::uint32_t block = p.window / 8;
       for (std::uint32_t t = 0; t < n; ++t) {
-        const float* t8 = tables.data() + std::size_t(t) * 2 * p.codebook_size;
         if (t % block == 0)
-          detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, t8, p.i8.data() + b, e - b, base.data());
-        detail::add_entries(t8 + p.codebook_size, p.iw.data() + b, base.data(), e - b, out + std::uint64_t(t) * N + b);
+          detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data() + t / block,
+                                    p.i8.data() + b, e - b, base.data());
+        detail::add_entries(p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, base.data(), e - b,
+                            out + std::uint64_t(t) * N + b);
       }
     }
     if (is_aligned(p)) {
