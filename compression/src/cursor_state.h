@@ -39,6 +39,12 @@ inline std::uint32_t value_count(const EncodedPage& p) {
 /// the first exception at or after i.
 void seek(const EncodedPage& p, std::uint32_t i, CursorState& s);
 
+/// seek(p, 0, s) for the lane blocks of [b, e) (whole blocks, section_lanes.cpp): the sections
+/// parsed side by side. Blocks with a raw lane are left out: their first vertices are written to
+/// `left_out` (room for (e - b) / 8 entries) and their count is returned, for the scalar seek.
+std::uint64_t seek_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, std::uint64_t* left_out,
+                         CursorState& s);
+
 /// Vertex v's exception at value index s.next[v], moving its next exception on. Inline: the
 /// lanes call it for every exception they meet.
 inline std::uint32_t take_exception(const EncodedPage& p, std::uint64_t v, CursorState& s) {

@@ -159,6 +159,9 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
   }
 }
 
+// Helpers of the lane parse (window decodes and the cursor's seek) follow in the anonymous
+// namespace below; seek_lanes is defined after them.
+
 namespace {
 
 // A whole-window decode runs a chunk of vertices in lockstep, step by step, so that each step's
@@ -400,6 +403,66 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
     }
   }
   c.release_if_large();
+}
+
+__attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
+                                                         std::uint64_t* left_out, CursorState& s) {
+  const bool predictive = p.method == PageMethod::predictive;
+  const std::uint32_t pb = position_bits(value_count(p));
+  const __m256i zero = _mm256_setzero_si256();
+  alignas(32) std::uint32_t slot[kLanes], width[kLanes], next[kLanes], entry[kLanes], left[kLanes], xwidth[kLanes],
+      linear[kLanes];
+  std::uint64_t scalar = 0;
+  for (std::uint64_t v = b; v < e; v += kLanes) {
+    const __m256i codes = unpack_codes(packed_codes(p, v));
+    const __m256i raw_lanes = _mm256_cmpeq_epi32(codes, _mm256_set1_epi32(int(BitBlocks::kRawWidth)));
+    if (!_mm256_testz_si256(raw_lanes, raw_lanes)) {
+      left_out[scalar++] = v;  // a raw lane: the whole block goes to the scalar seek
+      continue;
+    }
+    const std::uint8_t* group = p.blocks.payload.data() + p.blocks.group_offsets[v / BitBlocks::kGroupSize];
+    const __m256i section = load(p.blocks.section_bits.data() + v);
+    __m256i values = section;
+    __m256i predictor = zero;
+    if (predictive) {
+      __m256i first;
+      predictive_heads(group, section, p.first_width, predictor, first);
+      values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.first_width)));
+    }
+    const __m256i patched = _mm256_cmpeq_epi32(codes, _mm256_set1_epi32(int(kPatchedCode)));
+    __m256i slots = values, w = codes, x = zero, xw = zero, list = zero, first_position = zero;
+    if (!_mm256_testz_si256(patched, patched)) {
+      // Patched header: width, exception count, exception width; the first exception's
+      // position opens the list (the cursor starts at value index 0).
+      const __m256i h = read_lanes(group, values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
+      list = _mm256_add_epi32(values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
+      x = _mm256_and_si256(patched, _mm256_and_si256(_mm256_srli_epi32(h, 4), _mm256_set1_epi32(0xF)));
+      xw = _mm256_and_si256(patched, _mm256_srli_epi32(h, 8));
+      const __m256i skip = _mm256_mullo_epi32(x, _mm256_add_epi32(_mm256_set1_epi32(int(pb)), xw));
+      slots = _mm256_blendv_epi8(values, _mm256_add_epi32(list, skip), patched);
+      w = _mm256_blendv_epi8(codes, _mm256_and_si256(h, _mm256_set1_epi32(0xF)), patched);
+      first_position = read_lanes(group, list, _mm256_set1_epi32(int(pb)));
+    }
+    const __m256i has = _mm256_cmpgt_epi32(x, zero);  // lanes with an exception to come
+    store(slot, slots);
+    store(width, w);
+    store(next, _mm256_blendv_epi8(_mm256_set1_epi32(CursorState::kNoException), first_position, has));
+    store(entry, _mm256_and_si256(has, list));
+    store(left, x);
+    store(xwidth, xw);
+    store(linear, predictor);
+    for (std::uint64_t l = 0; l < kLanes; ++l) {
+      s.slot[v + l] = slot[l];
+      s.width[v + l] = std::uint8_t(width[l]);
+      s.next[v + l] = std::uint16_t(next[l]);
+      s.entry[v + l] = entry[l];
+      s.left[v + l] = std::uint8_t(left[l]);
+      s.exception_width[v + l] = std::uint8_t(xwidth[l]);
+    }
+    if (predictive)
+      for (std::uint64_t l = 0; l < kLanes; ++l) s.linear[v + l] = std::uint8_t(linear[l]);
+  }
+  return scalar;
 }
 
 }  // namespace detail

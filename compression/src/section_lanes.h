@@ -4,11 +4,12 @@
 //
 // Every lane reads its own section at its own offset and width, so the page format stays
 // per-vertex and randomly accessible; the scalar decoders' cost was the per-vertex chain of
-// dependent loads and shifts, not memory. Only plain sections (codes 0..13) go through lanes;
-// patched (14) and raw (15) ones are appended to `special` for the caller's scalar path, and
-// lanes leave their outputs (and, for predictive pages, their integers) to it. Results are
-// bit-identical to the scalar decoders: the same wrapping 32-bit integer steps and a float
-// multiply and add that are never fused.
+// dependent loads and shifts, not memory. Whole-window decodes and the cursor's seek parse plain
+// (codes 0..13) and patched (14) sections in lanes, the exceptions lane by lane; raw sections
+// (15) go to the caller's scalar path. One-step decodes take plain sections only and append the
+// others to `special`, leaving their outputs (and, for predictive pages, their integers) to the
+// caller. Results are bit-identical to the scalar decoders: the same wrapping 32-bit integer
+// steps and a float multiply and add that are never fused.
 //
 // All ranges [b, e) are whole lane blocks: b and e are multiples of 8, except that e may be
 // the page's vertex count rounded down to a multiple of 8 (the caller decodes the rest).

@@ -38,30 +38,41 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
   const bool predictive = p.method == PageMethod::predictive;
   s.linear.assign(predictive ? N : 0, 0);
   const std::uint8_t* data = p.blocks.payload.data();
-  parallel_for(N, 1 << 14, [&](std::size_t b, std::size_t e) {
-    for (std::uint64_t v = b; v < e; ++v) {
-      const std::uint32_t code = p.blocks.width(v);
-      s.next[v] = CursorState::kNoException;
-      s.slot[v] = s.entry[v] = 0;
-      s.width[v] = s.left[v] = s.exception_width[v] = 0;
-      if (code == BitBlocks::kRawWidth) continue;
-      if (predictive) s.linear[v] = std::uint8_t(read_bits(data, p.blocks.section_start(v), 1));
-      const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
-      const ValueSpan span = parse_values(data, values_start(p, v), code, count);
-      s.slot[v] = std::uint32_t(span.slots - group_bit);
-      s.width[v] = std::uint8_t(span.width);
-      s.exception_width[v] = std::uint8_t(span.exception_width);
-      std::uint64_t at = span.exception_list;
-      for (std::uint32_t x = 0; x < span.exceptions; ++x, at += pb + span.exception_width) {
-        const std::uint32_t position = read_bits(data, at, pb);
-        if (position >= i) {
-          s.next[v] = std::uint16_t(position);
-          s.entry[v] = std::uint32_t(at - group_bit);
-          s.left[v] = std::uint8_t(span.exceptions - x);
-          break;
-        }
+  auto seek_vertex = [&](std::uint64_t v) {
+    const std::uint32_t code = p.blocks.width(v);
+    s.next[v] = CursorState::kNoException;
+    s.slot[v] = s.entry[v] = 0;
+    s.width[v] = s.left[v] = s.exception_width[v] = 0;
+    if (code == BitBlocks::kRawWidth) return;
+    if (predictive) s.linear[v] = std::uint8_t(read_bits(data, p.blocks.section_start(v), 1));
+    const std::uint64_t group_bit = p.blocks.group_offsets[v / BitBlocks::kGroupSize] * 8;
+    const ValueSpan span = parse_values(data, values_start(p, v), code, count);
+    s.slot[v] = std::uint32_t(span.slots - group_bit);
+    s.width[v] = std::uint8_t(span.width);
+    s.exception_width[v] = std::uint8_t(span.exception_width);
+    std::uint64_t at = span.exception_list;
+    for (std::uint32_t x = 0; x < span.exceptions; ++x, at += pb + span.exception_width) {
+      const std::uint32_t position = read_bits(data, at, pb);
+      if (position >= i) {
+        s.next[v] = std::uint16_t(position);
+        s.entry[v] = std::uint32_t(at - group_bit);
+        s.left[v] = std::uint8_t(span.exceptions - x);
+        break;
       }
     }
+  };
+  // From the start of a page (sequential playback), the sections are parsed in lanes; a seek to
+  // a later value index scans each vertex's exceptions, one vertex at a time.
+  parallel_for(N, 1 << 14, [&](std::size_t b, std::size_t e) {
+    std::uint64_t v = b;
+    if (i == 0 && lanes_active()) {
+      v = b + (e - b) / kLanes * kLanes;
+      std::vector<std::uint64_t> left((v - b) / kLanes);
+      const std::uint64_t count = seek_lanes(p, b, v, left.data(), s);
+      for (std::uint64_t k = 0; k < count; ++k)
+        for (std::uint64_t l = 0; l < kLanes; ++l) seek_vertex(left[k] + l);
+    }
+    for (; v < e; ++v) seek_vertex(v);
   });
   s.raw.clear();
   for (std::uint64_t v = 0; v < N; ++v)
