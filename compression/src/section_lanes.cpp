@@ -226,6 +226,34 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
   }
 }
 
+// Where the values of 8 sections lie, from where each one's values (or, for a patched section,
+// its header) start and the lanes' 4-bit codes. A patched header holds the slot width (4 bits),
+// the exception count (4) and the exception width (5); the exception list follows it, then the
+// slots. Plain lanes have no exceptions (count and width 0).
+struct LaneValues {
+  __m256i patched;                  ///< all ones in patched lanes
+  __m256i slots, width;             ///< bit of the first slot (from the group) and slot width
+  __m256i list, exceptions, exception_width;
+};
+PNB_LANES LaneValues lane_values(const std::uint8_t* group, __m256i values, __m256i codes, std::uint32_t pb) {
+  LaneValues lv;
+  const __m256i zero = _mm256_setzero_si256();
+  lv.patched = _mm256_cmpeq_epi32(codes, _mm256_set1_epi32(int(kPatchedCode)));
+  lv.slots = values;
+  lv.width = codes;
+  lv.list = lv.exceptions = lv.exception_width = zero;
+  if (_mm256_testz_si256(lv.patched, lv.patched)) return lv;
+  const __m256i h = read_lanes(group, values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
+  lv.list = _mm256_add_epi32(values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
+  lv.exceptions = _mm256_and_si256(lv.patched, _mm256_and_si256(_mm256_srli_epi32(h, 4), _mm256_set1_epi32(0xF)));
+  lv.exception_width = _mm256_and_si256(lv.patched, _mm256_srli_epi32(h, 8));
+  const __m256i skip =
+      _mm256_mullo_epi32(lv.exceptions, _mm256_add_epi32(_mm256_set1_epi32(int(pb)), lv.exception_width));
+  lv.slots = _mm256_blendv_epi8(values, _mm256_add_epi32(lv.list, skip), lv.patched);
+  lv.width = _mm256_blendv_epi8(codes, _mm256_and_si256(h, _mm256_set1_epi32(0xF)), lv.patched);
+  return lv;
+}
+
 // Writes the exceptions of a patched lane over its unpacked slots (in-range positions only).
 // An entry (position, then value: at most 10 + 31 bits) is one 8-byte read after a shift of at
 // most 7; the payload's 8 bytes of padding cover the last.
@@ -288,29 +316,16 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
       store(c.linear + j0, zero);
     }
     store(c.adds + j0, _mm256_cmpgt_epi32(codes, zero));  // code 0: nothing to add
-    const __m256i patched = _mm256_cmpeq_epi32(codes, _mm256_set1_epi32(int(kPatchedCode)));
-    const int patched_mask = _mm256_movemask_ps(_mm256_castsi256_ps(patched));
-    __m256i slots = values, width = codes;
-    alignas(32) std::uint32_t header[kLanes], list[kLanes];
-    if (patched_mask) {
-      // Header: width (4 bits), exception count (4), exception width (5); the exception list
-      // follows, then the slots.
-      const __m256i h = read_lanes(group, values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
-      const __m256i w = _mm256_and_si256(h, _mm256_set1_epi32(0xF));
-      const __m256i x = _mm256_and_si256(_mm256_srli_epi32(h, 4), _mm256_set1_epi32(0xF));
-      const __m256i xw = _mm256_srli_epi32(h, 8);
-      const __m256i exception_list = _mm256_add_epi32(values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
-      const __m256i skip =
-          _mm256_mullo_epi32(x, _mm256_add_epi32(_mm256_set1_epi32(int(position_bits(count))), xw));
-      slots = _mm256_blendv_epi8(values, _mm256_add_epi32(exception_list, skip), patched);
-      width = _mm256_blendv_epi8(codes, w, patched);
-      store(header, h);
-      store(list, exception_list);
-    }
-    unpack_slots(group, slots, width, j0, count, c);
+    const LaneValues lv = lane_values(group, values, codes, position_bits(count));
+    const int patched_mask = _mm256_movemask_ps(_mm256_castsi256_ps(lv.patched));
+    alignas(32) std::uint32_t exceptions[kLanes], exception_width[kLanes], list[kLanes];
+    store(exceptions, lv.exceptions);
+    store(exception_width, lv.exception_width);
+    store(list, lv.list);
+    unpack_slots(group, lv.slots, lv.width, j0, count, c);
     for (int m = patched_mask; m; m &= m - 1) {
       const int l = __builtin_ctz(unsigned(m));
-      patch_lane(data, group_bit + list[l], (header[l] >> 4) & 0xF, header[l] >> 8, count, j0 + std::uint64_t(l), c);
+      patch_lane(data, group_bit + list[l], exceptions[l], exception_width[l], count, j0 + std::uint64_t(l), c);
     }
     return;
   }
@@ -429,27 +444,18 @@ __attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, s
       predictive_heads(group, section, p.first_width, predictor, first);
       values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.first_width)));
     }
-    const __m256i patched = _mm256_cmpeq_epi32(codes, _mm256_set1_epi32(int(kPatchedCode)));
-    __m256i slots = values, w = codes, x = zero, xw = zero, list = zero, first_position = zero;
-    if (!_mm256_testz_si256(patched, patched)) {
-      // Patched header: width, exception count, exception width; the first exception's
-      // position opens the list (the cursor starts at value index 0).
-      const __m256i h = read_lanes(group, values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
-      list = _mm256_add_epi32(values, _mm256_set1_epi32(int(kPatchedHeaderBits)));
-      x = _mm256_and_si256(patched, _mm256_and_si256(_mm256_srli_epi32(h, 4), _mm256_set1_epi32(0xF)));
-      xw = _mm256_and_si256(patched, _mm256_srli_epi32(h, 8));
-      const __m256i skip = _mm256_mullo_epi32(x, _mm256_add_epi32(_mm256_set1_epi32(int(pb)), xw));
-      slots = _mm256_blendv_epi8(values, _mm256_add_epi32(list, skip), patched);
-      w = _mm256_blendv_epi8(codes, _mm256_and_si256(h, _mm256_set1_epi32(0xF)), patched);
-      first_position = read_lanes(group, list, _mm256_set1_epi32(int(pb)));
-    }
-    const __m256i has = _mm256_cmpgt_epi32(x, zero);  // lanes with an exception to come
-    store(slot, slots);
-    store(width, w);
+    const LaneValues lv = lane_values(group, values, codes, pb);
+    // The cursor starts at value index 0: a lane's next exception is its list's first.
+    const __m256i first_position = _mm256_testz_si256(lv.patched, lv.patched)
+                                       ? zero
+                                       : read_lanes(group, lv.list, _mm256_set1_epi32(int(pb)));
+    const __m256i has = _mm256_cmpgt_epi32(lv.exceptions, zero);  // lanes with an exception to come
+    store(slot, lv.slots);
+    store(width, lv.width);
     store(next, _mm256_blendv_epi8(_mm256_set1_epi32(CursorState::kNoException), first_position, has));
-    store(entry, _mm256_and_si256(has, list));
-    store(left, x);
-    store(xwidth, xw);
+    store(entry, _mm256_and_si256(has, lv.list));
+    store(left, lv.exceptions);
+    store(xwidth, lv.exception_width);
     store(linear, predictor);
     for (std::uint64_t l = 0; l < kLanes; ++l) {
       s.slot[v + l] = slot[l];
