@@ -319,9 +319,11 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
     const LaneValues lv = lane_values(group, values, codes, position_bits(count));
     const int patched_mask = _mm256_movemask_ps(_mm256_castsi256_ps(lv.patched));
     alignas(32) std::uint32_t exceptions[kLanes], exception_width[kLanes], list[kLanes];
-    store(exceptions, lv.exceptions);
-    store(exception_width, lv.exception_width);
-    store(list, lv.list);
+    if (patched_mask) {
+      store(exceptions, lv.exceptions);
+      store(exception_width, lv.exception_width);
+      store(list, lv.list);
+    }
     unpack_slots(group, lv.slots, lv.width, j0, count, c);
     for (int m = patched_mask; m; m &= m - 1) {
       const int l = __builtin_ctz(unsigned(m));
