@@ -30,6 +30,41 @@ __attribute__((target("avx2"))) void add_entries_lanes(const float* table, std::
     store(out + i, _mm256_add_ps(load(base + i), lookup(table, rows(index + i, d))));
 }
 
+__attribute__((target("avx2"))) void add_rows8_lanes(const float* table, const std::int32_t* row, const float* base,
+                                                     std::uint64_t count, float* out, std::uint64_t stride,
+                                                     std::uint32_t steps) {
+  for (std::uint64_t i = 0; i < count; i += kLanes) {
+    __m256 r[8];
+    for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_ps(table + row[i + std::uint64_t(l)]);
+    // 8 x 8 transpose: r[l] holds vertex l's steps 0..7; c[k] gets step k of vertices 0..7.
+    __m256 t[8], q[8];
+    for (int l = 0; l < 8; l += 2) {
+      t[l] = _mm256_unpacklo_ps(r[l], r[l + 1]);
+      t[l + 1] = _mm256_unpackhi_ps(r[l], r[l + 1]);
+    }
+    for (int h = 0; h < 8; h += 4) {
+      q[h] = _mm256_shuffle_ps(t[h], t[h + 2], _MM_SHUFFLE(1, 0, 1, 0));
+      q[h + 1] = _mm256_shuffle_ps(t[h], t[h + 2], _MM_SHUFFLE(3, 2, 3, 2));
+      q[h + 2] = _mm256_shuffle_ps(t[h + 1], t[h + 3], _MM_SHUFFLE(1, 0, 1, 0));
+      q[h + 3] = _mm256_shuffle_ps(t[h + 1], t[h + 3], _MM_SHUFFLE(3, 2, 3, 2));
+    }
+    const __m256 b = load(base + i);
+    if (steps == 8) {
+      for (int k = 0; k < 4; ++k) {
+        store(out + std::uint64_t(k) * stride + i, _mm256_add_ps(b, _mm256_permute2f128_ps(q[k], q[k + 4], 0x20)));
+        store(out + std::uint64_t(k + 4) * stride + i, _mm256_add_ps(b, _mm256_permute2f128_ps(q[k], q[k + 4], 0x31)));
+      }
+    } else {
+      for (std::uint32_t k = 0; k < steps; ++k) {
+        const int c = int(k & 3);
+        const __m256 column = k < 4 ? _mm256_permute2f128_ps(q[c], q[c + 4], 0x20)
+                                    : _mm256_permute2f128_ps(q[c], q[c + 4], 0x31);
+        store(out + std::uint64_t(k) * stride + i, _mm256_add_ps(b, column));
+      }
+    }
+  }
+}
+
 __attribute__((target("avx2"))) void add_offsets_lanes(const float* table, const std::int32_t* offset,
                                                        const float* level, std::uint64_t count, float* out) {
   for (std::uint64_t i = 0; i < count; i += kLanes) {
@@ -77,6 +112,14 @@ void add_entries(const float* table, std::int32_t stride, const std::uint8_t* in
   std::uint64_t i = lane_part(count);
   if (i) add_entries_lanes(table, stride, index, base, i, out);
   for (; i < count; ++i) out[i] = base[i] + table[std::ptrdiff_t(index[i]) * stride];
+}
+
+void add_rows8(const float* table, const std::int32_t* row, const float* base, std::uint64_t count, float* out,
+               std::uint64_t stride, std::uint32_t steps) {
+  std::uint64_t i = lane_part(count);
+  if (i) add_rows8_lanes(table, row, base, i, out, stride, steps);
+  for (; i < count; ++i)
+    for (std::uint64_t k = 0; k < steps; ++k) out[k * stride + i] = base[i] + table[row[i] + std::ptrdiff_t(k)];
 }
 
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out) {

@@ -14,6 +14,15 @@ namespace penumbra::compression::detail {
 void add_entries(const float* table, std::int32_t stride, const std::uint8_t* index, const float* base,
                  std::uint64_t count, float* out);
 
+/// out[k * stride + i] = base[i] + table[row[i] + k] for k < steps (<= 8) and i < count: up to
+/// eight steps of a whole-window decode at once (`table` at the first step's column; `row` each
+/// vertex's row start). Each vertex's eight values table[row[i]] .. table[row[i] + 7] are one
+/// contiguous read (all eight must lie in its row, even when fewer steps are wanted), transposed
+/// in registers into the step rows, where a lookup per step gathers them one by one: the gathers
+/// bound a decode whose output stays in cache.
+void add_rows8(const float* table, const std::int32_t* row, const float* base, std::uint64_t count, float* out,
+               std::uint64_t stride, std::uint32_t steps);
+
 /// out[i] = level[i] + table[offset[i]] (an aligned page's full-window decode).
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out);
 

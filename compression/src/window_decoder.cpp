@@ -207,16 +207,29 @@ void decode_window(const EncodedPage& p, float* out) {
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     if (is_vq(p)) {
       // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
-      // then each step adds one D_W lookup (same float operations as vq_value).
+      // then each step adds its D_W value (same float operations as vq_value), eight steps at a
+      // time where they share a block.
       thread_local std::vector<float> base;
+      thread_local std::vector<std::int32_t> row;
       base.resize(e - b);
+      row.resize(e - b);
+      for (std::uint64_t v = b; v < e; ++v) row[v - b] = std::int32_t(p.iw[v]) * std::int32_t(p.window);
       const std::uint32_t block = p.window / 8;
-      for (std::uint32_t t = 0; t < n; ++t) {
+      for (std::uint32_t t = 0; t < n;) {
         if (t % block == 0)
           detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data() + t / block,
                                     p.i8.data() + b, e - b, base.data());
-        detail::add_entries(p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, base.data(), e - b,
-                            out + std::uint64_t(t) * N + b);
+        // Eight steps that share a block, read as eight floats of each row (t + 8 <= W keeps the
+        // read inside it; a partial window's last steps take a short group).
+        if (block % 8 == 0 && t % 8 == 0 && t + 8 <= p.window) {
+          const std::uint32_t steps = std::min<std::uint32_t>(8, n - t);
+          detail::add_rows8(p.cw.data() + t, row.data(), base.data(), e - b, out + std::uint64_t(t) * N + b, N, steps);
+          t += steps;
+        } else {
+          detail::add_entries(p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, base.data(), e - b,
+                              out + std::uint64_t(t) * N + b);
+          ++t;
+        }
       }
     }
     if (is_aligned(p)) {
@@ -230,9 +243,20 @@ void decode_window(const EncodedPage& p, float* out) {
         level[v - b] = detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]);
         offset[v - b] = std::int32_t(p.ia[v]) * D - std::int32_t(p.shift[v]);
       }
-      for (std::uint32_t t = 0; t < n; ++t)
-        detail::add_offsets(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
-                            out + std::uint64_t(t) * N + b);
+      for (std::uint32_t t = 0; t < n;) {
+        // A row holds 2W - 1 values and a vertex's frame starts at most W - 1 into it, so eight
+        // values from step t stay inside while t + 8 <= W.
+        if (t + 8 <= p.window) {
+          const std::uint32_t steps = std::min<std::uint32_t>(8, n - t);
+          detail::add_rows8(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
+                            out + std::uint64_t(t) * N + b, N, steps);
+          t += steps;
+        } else {
+          detail::add_offsets(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
+                              out + std::uint64_t(t) * N + b);
+          ++t;
+        }
+      }
     }
     if (!has_residual(p) && p.method != PageMethod::predictive) return;
     thread_local std::vector<std::uint32_t> scratch;
