@@ -186,6 +186,11 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
         p.blocks.section_bits[v] = std::uint32_t(pos - p.blocks.group_offsets[g] * 8);
         if (!parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), limit, s))
           r.fail("bits of vertex " + std::to_string(v) + " run past their group");
+        // A patched section always has an exception (the encoder patches only to store one); one
+        // without any would decode as width-0 plain in lanes but be skipped by the scalar path,
+        // which differ in the sign of a zero.
+        if (s.code == kPatchedCode && s.values.exceptions == 0)
+          r.fail("patched section of vertex " + std::to_string(v) + " has no exceptions");
         if (s.code == kPatchedCode && !exceptions_increasing(p.blocks.payload.data(), s, p))
           r.fail("exception list of vertex " + std::to_string(v) + " is out of order");
         pos = s.end;

@@ -7,6 +7,9 @@
 #include "penumbra/compression/streaming_encoder.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
+#include "bit_blocks_builder.h"
+#include "page_format.h"
+#include "value_layout.h"
 #include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
@@ -119,6 +122,45 @@ TEST(FieldFile, CorruptBytesAreDetectedAndNamed) {
       }
     }
     EXPECT_TRUE(rejected) << "flipped byte " << i << " of " << bytes.size() << " went unnoticed";
+  }
+}
+
+TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
+  // A page whose checksum is right but whose bit block holds a patched section (code 14) with no
+  // exceptions: the encoder never writes one, and the vector and scalar decoders would differ
+  // on it in the sign of a zero, so the parser refuses it, naming the vertex.
+  const auto f = testing::smooth_blobs(24, 8);
+  const CodecParams params = small_params({BoundKind::absolute, 1e-4});
+  auto page = encode_window(f.values.data(), f.vertices, 8, f.times.data(), 0, params, 1e-4f);
+  ASSERT_TRUE(page.method == PageMethod::vq_residual || page.method == PageMethod::vq_aligned_residual ||
+              page.method == PageMethod::predictive)
+      << to_string(page.method);
+  const bool predictive = page.method == PageMethod::predictive;
+  const std::uint64_t broken = 5;
+  page.blocks = detail::build_bit_blocks(f.vertices, [&](std::uint64_t, std::uint64_t, const auto& encode) {
+    encode([&](std::uint64_t vertex, detail::BitWriter& w) -> std::uint32_t {
+      if (predictive) {
+        w.put(0, 1);                 // predictor: previous value
+        w.put(0, page.first_width);  // k_0
+      }
+      if (vertex != broken) return 0;  // all zero: no value bits
+      w.put(0, 4);                     // slot width 0
+      w.put(0, 4);                     // no exceptions
+      w.put(0, 5);                     // exception width
+      return detail::kPatchedCode;
+    });
+  });
+  const auto bytes = detail::serialize_page(page, 0);
+  detail::PageHeader header;
+  ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
+  try {
+    detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, f.vertices, 8, 4, "page 0",
+                               std::uint32_t(PageMethod::vq_aligned_residual));
+    FAIL() << "a patched section without exceptions was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::io_error);
+    EXPECT_NE(std::string(e.what()).find("vertex 5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no exceptions"), std::string::npos) << e.what();
   }
 }
 

@@ -29,7 +29,8 @@ struct Decodes {
 std::vector<std::uint32_t> playback_order(std::uint32_t n) {
   std::vector<std::uint32_t> order;
   for (std::uint32_t t = 0; t < n; ++t) order.push_back(t);
-  for (std::uint32_t t : {5u, 6u, 7u, n - 1, 0u, 1u, n / 2, n / 2, n / 2 + 1, n / 2 + 2}) order.push_back(t);
+  for (std::uint32_t t : {5u, 6u, 7u, n - 1, 0u, 1u, n / 2, n / 2, n / 2 + 1, n / 2 + 2})
+    if (t < n) order.push_back(t);  // pages shorter than 8 steps skip the later jumps
   return order;
 }
 
@@ -182,6 +183,21 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   expect_lanes_match_scalar(vq, "plain VQ");
   expect_lanes_match_scalar(shifted, "aligned VQ");
   expect_lanes_match_scalar(partial, "plain VQ, partial window");
+  // Eight steps per row read (add_rows8): a window whose D8 blocks span 16 steps, the shortest
+  // window, and aligned partial windows whose last group of steps is short, where the read of
+  // eight values ends at a row's last one for a shift of 0.
+  CodecParams plain128 = plain;
+  plain128.window = 128;
+  const auto long_waves = oscillating_sources(N, 128);
+  expect_lanes_match_scalar(encode(long_waves, 128, plain128, 0.0f), "plain VQ, W = 128");
+  expect_lanes_match_scalar(encode(long_waves, 101, plain128, 0.0f), "plain VQ, W = 128, 101 steps");
+  CodecParams aligned8 = aligned;
+  aligned8.window = 8;
+  expect_lanes_match_scalar(encode(testing::relaxing_front(N, 8), 8, aligned8, 0.0f), "W = 8, 8 steps");
+  expect_lanes_match_scalar(encode(testing::relaxing_front(N, 5), 5, aligned8, 0.0f), "W = 8, 5 steps");
+  const auto partial_front = encode(testing::relaxing_front(N, 45), 45, aligned, 0.0f);
+  ASSERT_EQ(partial_front->method, PageMethod::vq_aligned);
+  expect_lanes_match_scalar(partial_front, "aligned VQ, 45 of 64 steps");
 }
 
 TEST(VectorDecode, CanBeTurnedOffAndOn) {
