@@ -1,6 +1,7 @@
 // compression/src/page_methods.h -- what each PageMethod stores (private).
 #pragma once
 #include "penumbra/compression/codec_params.h"
+#include "penumbra/compression/encoded_page.h"
 
 namespace penumbra::compression::detail {
 
@@ -15,5 +16,12 @@ inline bool has_bit_blocks(PageMethod m) {
   return m == PageMethod::vq_residual || m == PageMethod::vq_aligned_residual || m == PageMethod::predictive;
 }
 constexpr std::uint32_t kMaxMethod = 4;
+
+/// Throws Error(invalid_argument), naming `call`, unless the page's shape is one the decoders
+/// can read without going out of bounds: a known method, a window that is a multiple of 8 in
+/// [8, 1024], 1 <= step_count <= window, codebooks of 1..256 entries, and every array of the
+/// size the method needs. O(1): pages from a file were checked value by value when parsed; this
+/// guards pages a caller assembled by hand.
+void require_decodable(const EncodedPage& p, const char* call);
 
 }  // namespace penumbra::compression::detail

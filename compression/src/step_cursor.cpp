@@ -114,6 +114,7 @@ StepCursor& StepCursor::operator=(StepCursor&&) noexcept = default;
 void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uint32_t t, float* out) {
   require(page != nullptr, "StepCursor::decode: null page");
   const EncodedPage& p = *page;
+  detail::require_decodable(p, "StepCursor::decode");
   if (!detail::has_bit_blocks(p.method)) {
     m_page.reset();
     m_state.reset();

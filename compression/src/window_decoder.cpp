@@ -180,7 +180,44 @@ void vq_base_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::u
 
 }  // namespace detail
 
+void detail::require_decodable(const EncodedPage& p, const char* call) {
+  // Messages are built only on failure: the decoders call this for every step.
+  const auto fail = [&](const std::string& what) { throw Error(ErrorCode::invalid_argument, std::string(call) + ": " + what); };
+  const std::uint64_t N = p.vertex_count, K = p.codebook_size, W = p.window;
+  const auto sized = [&](std::uint64_t have, std::uint64_t want, const char* what) {
+    if (have != want) fail(std::string(what) + " holds " + std::to_string(have) + " values; expected " + std::to_string(want));
+  };
+  if (std::uint32_t(p.method) > kMaxMethod) fail("unknown page method " + std::to_string(std::uint32_t(p.method)));
+  if (W < 8 || W > 1024 || W % 8 != 0) fail("window " + std::to_string(W) + " is not a multiple of 8 in [8, 1024]");
+  if (p.step_count < 1 || p.step_count > W) fail("step count " + std::to_string(p.step_count) + " outside 1..window");
+  if (uses_plain_vq(p.method) || uses_aligned_vq(p.method)) {
+    if (K < 1 || K > 256) fail("codebook size " + std::to_string(K) + " outside 1..256");
+    sized(p.mean_q.size(), N, "mean_q");
+  }
+  if (uses_plain_vq(p.method)) {
+    sized(p.c8.size(), K * 8, "c8");
+    sized(p.cw.size(), K * W, "cw");
+    sized(p.i8.size(), N, "i8");
+    sized(p.iw.size(), N, "iw");
+  }
+  if (uses_aligned_vq(p.method)) {
+    if (W > 256) fail("shift-aligned page with a window over 256 steps");
+    sized(p.ca.size(), K * (2 * W - 1), "ca");
+    sized(p.shift.size(), N, "shift");
+    sized(p.ia.size(), N, "ia");
+  }
+  if (has_bit_blocks(p.method)) {
+    const std::uint64_t groups = (N + kGroup - 1) / kGroup;
+    sized(p.blocks.widths.size(), (N + 1) / 2, "widths");
+    sized(p.blocks.section_bits.size(), N, "section_bits");
+    sized(p.blocks.group_offsets.size(), groups + 1, "group_offsets");
+    if (p.blocks.payload.size() < p.blocks.group_offsets.back() + 8)
+      fail("bit payload shorter than its groups plus 8 bytes of padding");
+  }
+}
+
 void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
+  detail::require_decodable(p, "decode_step");
   require(out != nullptr, "decode_step: null output");
   require(t < p.step_count, "decode_step: step " + std::to_string(t) + " is outside the page's " +
                                 std::to_string(p.step_count) + " steps");
@@ -199,6 +236,7 @@ void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
 }
 
 void decode_window(const EncodedPage& p, float* out) {
+  detail::require_decodable(p, "decode_window");
   require(out != nullptr, "decode_window: null output");
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
@@ -281,6 +319,7 @@ void decode_window(const EncodedPage& p, float* out) {
 }
 
 void decode_vertex(const EncodedPage& p, std::uint64_t v, float* out) {
+  detail::require_decodable(p, "decode_vertex");
   require(out != nullptr, "decode_vertex: null output");
   require(v < p.vertex_count, "decode_vertex: vertex " + std::to_string(v) + " is outside the page's " +
                                   std::to_string(p.vertex_count) + " vertices");

@@ -212,6 +212,53 @@ TEST(WindowCodec, BadParametersAreRejected) {
   EXPECT_THROW(encode(f, 0, 65, p), Error);
 }
 
+// Every decoder checks the shape of the page it is handed (pages from a file are checked when
+// parsed; these guard pages assembled by hand), so a malformed page is an invalid_argument
+// error naming the call, never a crash or a read out of bounds.
+TEST(WindowCodec, MalformedPagesAreRejectedByEveryDecoder) {
+  const auto f = testing::smooth_blobs(100, 16);
+  CodecParams p;
+  p.window = 16;
+  p.codebook_size = 8;
+  const EncodedPage good = encode(f, 0, 16, p);
+  std::vector<float> out(f.vertices * 16);
+  ASSERT_NO_THROW(decode_window(good, out.data()));
+  auto expect_rejected = [&](const EncodedPage& bad, const std::string& what) {
+    for (int call = 0; call < 4; ++call) {
+      try {
+        if (call == 0) decode_window(bad, out.data());
+        if (call == 1) decode_step(bad, 0, out.data());
+        if (call == 2) decode_vertex(bad, 0, out.data());
+        if (call == 3) StepCursor().decode(std::make_shared<const EncodedPage>(bad), 0, out.data());
+        ADD_FAILURE() << what << ": accepted by decoder " << call;
+      } catch (const Error& e) {
+        EXPECT_EQ(e.code(), ErrorCode::invalid_argument) << what;
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      }
+    }
+  };
+  EncodedPage bad = good;
+  bad.window = 4;  // W / 8 would be 0: a division by zero in the decoders
+  expect_rejected(bad, "window 4");
+  bad = good;
+  bad.step_count = 17;
+  expect_rejected(bad, "step count 17");
+  bad = good;
+  bad.codebook_size = 300;
+  expect_rejected(bad, "codebook size 300");
+  bad = good;
+  if (bad.method == PageMethod::vq || bad.method == PageMethod::vq_residual) {
+    bad.cw.pop_back();
+    expect_rejected(bad, "cw holds");
+  } else {
+    bad.ca.pop_back();
+    expect_rejected(bad, "ca holds");
+  }
+  bad = good;
+  bad.mean_q.resize(3);
+  expect_rejected(bad, "mean_q holds 3");
+}
+
 }  // namespace
 }  // namespace penumbra::compression
 
