@@ -82,8 +82,8 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
   std::memcpy(&header_crc, header.data() + header_bytes - 4, 4);
   if (header_crc != detail::crc32(header.data(), header_bytes - 4)) fail(path, "file header checksum mismatch");
   info.name.assign(reinterpret_cast<const char*>(header.data()) + detail::kHeaderFixedBytes, name_len);
-  if (info.vertex_count < 1 || info.window < 8 || info.window > 1024 || info.window % 8 != 0 ||
-      info.codebook_size < 2 || info.codebook_size > 256 || std::uint32_t(info.bound.kind) > 2)
+  if (info.vertex_count < 1 || !detail::valid_window(info.window) || !detail::valid_codebook_size(info.codebook_size) ||
+      std::uint32_t(info.bound.kind) > 2)
     fail(path, "file header holds invalid parameters");
 
   // Index trailer: present and consistent, or the file did not finish.

@@ -10,6 +10,7 @@
 #include "crc32.h"
 #include "file_layout.h"
 #include "page_format.h"
+#include "page_methods.h"
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/version.h"
 #include "penumbra/core/error.h"
@@ -77,9 +78,9 @@ FieldWriter::FieldWriter(const std::string& path, const FieldInfo& info)
     : m_path(path), m_partial(path + ".partial"), m_info(info) {
   require(!path.empty(), "FieldWriter: empty path");
   require(info.vertex_count >= 1, "FieldWriter: vertex_count must be positive");
-  require(info.window >= 8 && info.window <= 1024 && info.window % 8 == 0,
+  require(detail::valid_window(info.window),
           "FieldWriter: window must be a multiple of 8 in [8, 1024], got " + std::to_string(info.window));
-  require(info.codebook_size >= 2 && info.codebook_size <= 256,
+  require(detail::valid_codebook_size(info.codebook_size),
           "FieldWriter: codebook_size must be 2..256, got " + std::to_string(info.codebook_size));
   require(info.name.size() <= detail::kMaxNameBytes, "FieldWriter: field name longer than 4096 bytes");
   m_file = std::fopen(m_partial.c_str(), "wb");

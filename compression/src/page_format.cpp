@@ -139,7 +139,7 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
       if (p.i8[v] >= K || p.iw[v] >= K) r.fail("codebook index out of range at vertex " + std::to_string(v));
   }
   if (uses_aligned_vq(p.method)) {
-    if (W > 256) r.fail("shift-aligned page with a window over 256 steps");
+    if (W > kMaxAlignedWindow) r.fail("shift-aligned page with a window over 256 steps");
     p.mean_lo = r.get<float>();
     p.mean_scale = r.get<float>();
     p.ca_lo = r.get<float>();

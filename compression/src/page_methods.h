@@ -17,6 +17,13 @@ inline bool has_bit_blocks(PageMethod m) {
 }
 constexpr std::uint32_t kMaxMethod = 4;
 
+/// Windows are a multiple of 8 (D8 holds the means of 8 equal sub-blocks) in [8, 1024].
+inline bool valid_window(std::uint64_t window) { return window >= 8 && window <= 1024 && window % 8 == 0; }
+/// Codebooks hold 2..256 entries (an index is one byte).
+inline bool valid_codebook_size(std::uint64_t size) { return size >= 2 && size <= 256; }
+/// Shift-aligned pages cover windows up to this many steps (a shift is one byte).
+constexpr std::uint32_t kMaxAlignedWindow = 256;
+
 /// Throws Error(invalid_argument), naming `call`, unless the page's shape is one the decoders
 /// can read without going out of bounds: a known method, a window that is a multiple of 8 in
 /// [8, 1024], 1 <= step_count <= window, codebooks of 1..256 entries, and every array of the

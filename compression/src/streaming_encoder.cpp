@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "page_methods.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::compression {
@@ -20,7 +21,7 @@ std::uint64_t StreamingEncoder::required_budget(std::uint64_t n, const CodecPara
                           std::uint64_t(c.codebook_size) * (c.window + 8) * 4 * 2;
   // Section offsets of a page with bit blocks (4 bytes per vertex).
   working += n * 4;
-  if (c.aligned && c.window <= 256) {
+  if (c.aligned && c.window <= detail::kMaxAlignedWindow) {
     // Shift-aligned stage: per vertex shift, level (float, 16-bit, dequantised) and index;
     // the sample's frames of 2W-1 values (all, and the half it trains on); the aligned
     // codebook as trained, stored and dequantised, twice when a cold start is tried as well.
@@ -33,9 +34,9 @@ std::uint64_t StreamingEncoder::required_budget(std::uint64_t n, const CodecPara
 StreamingEncoder::StreamingEncoder(StreamingOptions options) : m_options(std::move(options)) {
   const CodecParams& c = m_options.codec;
   require(m_options.vertex_count >= 1, "StreamingEncoder: vertex_count must be positive");
-  require(c.window >= 8 && c.window <= 1024 && c.window % 8 == 0,
+  require(detail::valid_window(c.window),
           "StreamingEncoder: window must be a multiple of 8 in [8, 1024], got " + std::to_string(c.window));
-  require(c.codebook_size >= 2 && c.codebook_size <= 256,
+  require(detail::valid_codebook_size(c.codebook_size),
           "StreamingEncoder: codebook_size must be 2..256, got " + std::to_string(c.codebook_size));
   require(c.bound.kind == BoundKind::none || (std::isfinite(c.bound.value) && c.bound.value > 0),
           "StreamingEncoder: error bound must be positive and finite");

@@ -188,10 +188,10 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     if (have != want) fail(std::string(what) + " holds " + std::to_string(have) + " values; expected " + std::to_string(want));
   };
   if (std::uint32_t(p.method) > kMaxMethod) fail("unknown page method " + std::to_string(std::uint32_t(p.method)));
-  if (W < 8 || W > 1024 || W % 8 != 0) fail("window " + std::to_string(W) + " is not a multiple of 8 in [8, 1024]");
+  if (!valid_window(W)) fail("window " + std::to_string(W) + " is not a multiple of 8 in [8, 1024]");
   if (p.step_count < 1 || p.step_count > W) fail("step count " + std::to_string(p.step_count) + " outside 1..window");
   if (uses_plain_vq(p.method) || uses_aligned_vq(p.method)) {
-    if (K < 1 || K > 256) fail("codebook size " + std::to_string(K) + " outside 1..256");
+    if (!valid_codebook_size(K)) fail("codebook size " + std::to_string(K) + " outside 2..256");
     sized(p.mean_q.size(), N, "mean_q");
   }
   if (uses_plain_vq(p.method)) {
@@ -201,7 +201,7 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     sized(p.iw.size(), N, "iw");
   }
   if (uses_aligned_vq(p.method)) {
-    if (W > 256) fail("shift-aligned page with a window over 256 steps");
+    if (W > kMaxAlignedWindow) fail("shift-aligned page with a window over 256 steps");
     sized(p.ca.size(), K * (2 * W - 1), "ca");
     sized(p.shift.size(), N, "shift");
     sized(p.ia.size(), N, "ia");

@@ -9,6 +9,7 @@
 #include "aligned_lbg.h"
 #include "bit_blocks_builder.h"
 #include "bit_io.h"
+#include "page_methods.h"
 #include "predictive_layout.h"
 #include "splitmix.h"
 #include "value_layout.h"
@@ -354,9 +355,9 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
   const std::uint32_t W = params.window, K = params.codebook_size;
   require(steps != nullptr && times != nullptr, "encode_window: null data or times");
   require(vertex_count >= 1, "encode_window: vertex_count must be positive");
-  require(W >= 8 && W <= 1024 && W % 8 == 0,
+  require(detail::valid_window(W),
           "encode_window: window must be a multiple of 8 in [8, 1024], got " + std::to_string(W));
-  require(K >= 2 && K <= 256, "encode_window: codebook_size must be 2..256, got " + std::to_string(K));
+  require(detail::valid_codebook_size(K), "encode_window: codebook_size must be 2..256, got " + std::to_string(K));
   require(step_count >= 1 && step_count <= W, "encode_window: step_count must be 1..window, got " +
                                                   std::to_string(step_count));
   require(std::isfinite(bound_abs) && bound_abs >= 0.f,
@@ -485,7 +486,7 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
   // Shift-aligned alternative: trained on the same sample, kept if it fits the sample better.
   AlignedStage aligned;
   // Shifts are stored in one byte: windows up to 256 steps.
-  const bool try_aligned = params.aligned && W <= 256 && n >= 2 && plain_mse > 0;
+  const bool try_aligned = params.aligned && W <= detail::kMaxAlignedWindow && n >= 2 && plain_mse > 0;
   const bool warm_aligned = try_aligned && warm_ok && warm->ca.size() == std::size_t(K) * (2 * W - 1);
   if (try_aligned) {
     aligned.prepare(win, N);
