@@ -180,6 +180,10 @@ struct CpuRayCaster::Impl {
                     std::vector<Entry>& out) const;
   // Starts `c` at `entry` (see WalkCursor).
   void begin_walk(const TfTable& tf, const Entry& entry, const WalkStats& stats, WalkCursor& c) const;
+  // Starts `c` at the next of `entries` from `next` that is not behind `done`, the depth where
+  // the ray's last walk left the mesh; false when none is left.
+  bool begin_next_walk(const TfTable& tf, const std::vector<Entry>& entries, std::size_t& next, double done,
+                       const WalkStats& stats, WalkCursor& c) const;
   // Walks `c` through one tet. Returns false when its walk ended: at the boundary exit, when the
   // ray became opaque or when the walk was cut short. kShaded: the emitted colour is modulated
   // by `shade` (null otherwise); a separate instantiation keeps the unshaded walk free of it.
@@ -306,6 +310,21 @@ void CpuRayCaster::Impl::begin_walk(const TfTable& tf, const Entry& entry, const
   c.pending_count = 0;
   c.opaque = false;
   c.stuck = false;
+}
+
+bool CpuRayCaster::Impl::begin_next_walk(const TfTable& tf, const std::vector<Entry>& entries, std::size_t& next,
+                                         double done, const WalkStats& stats, WalkCursor& c) const {
+  while (next < entries.size()) {
+    const Entry& e = entries[next++];
+    // An entry before the last exit lies on a stretch already walked (a grazing touch). The
+    // slack keeps a re-entry at the same depth: in a non-conforming mesh (hanging nodes) the
+    // walk leaves a big tet through an unmatched face and the small tets behind it are entered
+    // through their own unmatched faces, whose depth may round a few ulps below the exit's.
+    if (e.t < done - reentry_slack) continue;
+    begin_walk(tf, e, stats, c);
+    return true;
+  }
+  return false;
 }
 
 void CpuRayCaster::Impl::end_walk(const TfTable& tf, double stop_transmittance, WalkCursor& c, Composite& acc,
@@ -446,13 +465,8 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const
   find_entries(f, geo, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
   WalkCursor c;
-  for (const Entry& e : entries) {
-    // An entry before the last exit lies on a stretch already walked (a grazing touch). The
-    // slack keeps a re-entry at the same depth: in a non-conforming mesh (hanging nodes) the
-    // walk leaves a big tet through an unmatched face and the small tets behind it are entered
-    // through their own unmatched faces, whose depth may round a few ulps below the exit's.
-    if (e.t < done - reentry_slack) continue;
-    begin_walk(tf, e, stats, c);
+  std::size_t next = 0;
+  while (begin_next_walk(tf, entries, next, done, stats, c)) {
     if (shade != nullptr)
       while (step<true>(f, geo, tf, shade, stop_transmittance, c, acc, stats)) {
       }
@@ -470,16 +484,7 @@ void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int
                                      Image& image) const {
   const int width = x1 - x0, count = width * (y1 - y0);
   int next_pixel = 0;
-  // Starts the next entry of `j` that is not behind its last exit; false when none is left.
-  auto next_walk = [&](RayJob& j) {
-    while (j.next_entry < j.entries.size()) {
-      const Entry& e = j.entries[j.next_entry++];
-      if (e.t < j.done - reentry_slack) continue;  // see trace_ray
-      begin_walk(fc.tf, e, j.stats, j.cursor);
-      return true;
-    }
-    return false;
-  };
+  auto next_walk = [&](RayJob& j) { return begin_next_walk(fc.tf, j.entries, j.next_entry, j.done, j.stats, j.cursor); };
   auto finish = [&](const RayJob& j) { store_pixel(j.acc, image.pixel(j.x, j.y)); };
   // Fills a slot with the next pixel that has a walk to do (pixels without one are finished at
   // once); false when the tile has no pixel left.
