@@ -66,11 +66,10 @@ inline double attenuation_series(double a, double k) {
   return sum;
 }
 
-/// Z(a, b) for delta = a + |b - a| / 2 > 0.02 (see attenuation_integral), out of line: thicker
-/// segments are rare in a fine mesh, and inlined their series would crowd the walk's hot code.
-[[gnu::noinline]] inline double attenuation_integral_thick(double a, double b) {
-  const double k = 0.5 * (b - a);
-  const double delta = a + std::fabs(k);
+/// Z(a, b) for delta = a + |k| > 0.02, k = (b - a) / 2, as attenuation_integral computed them;
+/// out of line: thicker segments are rare in a fine mesh, and inlined their series would crowd
+/// the walk's hot code.
+[[gnu::noinline]] inline double attenuation_integral_thick(double a, double b, double k, double delta) {
   // Order N suffices while delta^(N+1)/(N+1)! < 1e-14.
   if (delta <= 0.08) return attenuation_series<7>(a, k);
   if (delta <= 0.14) return attenuation_series<8>(a, k);
@@ -89,7 +88,7 @@ inline double attenuation_integral(double a, double b) {
     if (delta <= 1.2e-3) return attenuation_series<3>(a, k);
     return attenuation_series<5>(a, k);
   }
-  return attenuation_integral_thick(a, b);
+  return attenuation_integral_thick(a, b, k, delta);
 }
 
 /// Colour and transmittance of one linear piece, as above. `cf`/`cb` are front/back colours.
