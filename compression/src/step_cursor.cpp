@@ -67,10 +67,11 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
     std::uint64_t v = b;
     if (i == 0 && lanes_active()) {
       v = b + (e - b) / kLanes * kLanes;
-      std::vector<std::uint64_t> left((v - b) / kLanes);
-      const std::uint64_t count = seek_lanes(p, b, v, left.data(), s);
-      for (std::uint64_t k = 0; k < count; ++k)
-        for (std::uint64_t l = 0; l < kLanes; ++l) seek_vertex(left[k] + l);
+      // Lane blocks holding a raw section are left to the scalar seek.
+      std::vector<std::uint64_t> raw_blocks((v - b) / kLanes);
+      const std::uint64_t raw_block_count = seek_lanes(p, b, v, raw_blocks.data(), s);
+      for (std::uint64_t k = 0; k < raw_block_count; ++k)
+        for (std::uint64_t l = 0; l < kLanes; ++l) seek_vertex(raw_blocks[k] + l);
     }
     for (; v < e; ++v) seek_vertex(v);
   });
