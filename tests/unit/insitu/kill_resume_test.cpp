@@ -6,13 +6,12 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <set>
 #include <thread>
 
 #include "cinema_database.h"
+#include "database_checks.h"
 #include "penumbra/insitu/stored_run.h"
 #include "penumbra/core/error.h"
-#include "penumbra/render/image.h"
 #include "test_util.h"
 
 extern char** environ;
@@ -45,22 +44,6 @@ std::size_t listed_rows(const std::string& dir) {
   return table.empty() ? 0 : table.size() - 1;  // empty: not created yet
 }
 
-/// Every row's FILE exists and decodes as a 32x32 PNG; returns the rows (header first).
-std::vector<std::vector<std::string>> check_valid(const std::string& dir) {
-  const auto table = CinemaDatabase::parse_csv(testing::read_text(dir + "/data.csv"), "data.csv");
-  EXPECT_FALSE(table.empty());
-  EXPECT_EQ(table.at(0), (std::vector<std::string>{"time", "phi", "theta", "field", "FILE"}));
-  std::set<std::vector<std::string>> keys;
-  for (std::size_t r = 1; r < table.size(); ++r) {
-    int w = 0, h = 0;
-    EXPECT_NO_THROW(render::read_png_rgb(dir + "/" + table[r].back(), w, h)) << table[r].back();
-    EXPECT_EQ(w, 32);
-    EXPECT_EQ(h, 32);
-    EXPECT_TRUE(keys.insert({table[r].begin(), table[r].end() - 1}).second) << "duplicate parameters in row " << r;
-  }
-  return table;
-}
-
 TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
   TempDir tmp;
   // Kill at several points of a step: right after a commit is seen and some time into the next.
@@ -76,18 +59,17 @@ TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
     kill(pid, SIGKILL);
     const int status = wait_exit(pid);
     ASSERT_TRUE(WIFSIGNALED(status)) << "the solver ended before it was killed";
-    const auto table = check_valid(dir);
+    const auto table = testing::check_valid_database(dir);
     ASSERT_GE(table.size() - 1, wanted);
     EXPECT_EQ((table.size() - 1) % 6, 0u) << "a step was listed partially";
 
     // Resume: the same directory with if_exists "resume" appends later cycles.
     const long next = static_cast<long>((table.size() - 1) / 6);
     ASSERT_EQ(wait_exit(spawn_solver(dir, next, 2, "resume")), 0);
-    const auto resumed = check_valid(dir);
+    const auto resumed = testing::check_valid_database(dir);
     ASSERT_EQ(resumed.size(), table.size() + 12);
     for (std::size_t r = 0; r < table.size(); ++r) EXPECT_EQ(resumed[r], table[r]) << "row " << r << " changed";
-    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
-      EXPECT_EQ(e.path().string().find(".tmp."), std::string::npos) << "left over: " << e.path();
+    testing::expect_no_temporaries(dir);
   }
 }
 
