@@ -10,7 +10,8 @@
 # errors, default 60000: the Monte Carlo image costs about 1 ms of rays per point),
 # PNB_BENCH_OCC_ALPHA (global attenuation alpha, default 1), PNB_BENCH_OCC_WEIGHT (section
 # weight: mean, the default, or thesis for eq. 3-15), PNB_BENCH_OCC_PYRAMID (what the pyramid filters:
-# opacity, the default, extinction or step_opacity; occlusion.h) and PNB_BENCH_OCC_GPU (on, the default: also
+# opacity, the default, extinction or step_opacity; occlusion.h), PNB_BENCH_OCC_LEVEL (the level a cone
+# section reads: continuous, the default, or thesis for whole levels stepping at r_c = 2 sigma) and PNB_BENCH_OCC_GPU (on, the default: also
 # lines with backend "gpu" when the GPU backend is built -- a hardware device, else Mesa's llvmpipe,
 # which shows agreement but a CPU's speed; off: CPU lines only) and PNB_BENCH_OCC_MODES (all, the
 # default; shadow: only ao+shadow and the hard-shadow lines). PNB_EGL_DEVICE / PNB_EGL_LIBRARY
@@ -27,7 +28,7 @@ bench_occlusion() {
       --size "${PNB_BENCH_OCC_SIZE:-512x512}" --grid "${PNB_BENCH_OCC_GRID:-128}" \
       --preillum "${PNB_BENCH_OCC_PREILLUM:-64}" --mc-max-points "${PNB_BENCH_OCC_MC_MAX_POINTS:-60000}" \
       --alpha "${PNB_BENCH_OCC_ALPHA:-1}" --weight "${PNB_BENCH_OCC_WEIGHT:-mean}" \
-      --pyramid "${PNB_BENCH_OCC_PYRAMID:-opacity}" --gpu "${PNB_BENCH_OCC_GPU:-on}" \
+      --pyramid "${PNB_BENCH_OCC_PYRAMID:-opacity}" --level "${PNB_BENCH_OCC_LEVEL:-continuous}" --gpu "${PNB_BENCH_OCC_GPU:-on}" \
       --modes "${PNB_BENCH_OCC_MODES:-all}"
   done
 }

@@ -3,6 +3,7 @@
 //
 // Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--shared-data DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
+//          [--level continuous|thesis]
 //          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
 //          [--modes all|shadow]  (shadow: only ao+shadow and the hard-shadow lines)
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
@@ -239,6 +240,9 @@ int run(int argc, char** argv) {
   const double alpha = std::stod(pb::option(argc, argv, "alpha", "1"));
   const std::string weight_name = pb::option(argc, argv, "weight", "mean");
   const std::string pyramid_name = pb::option(argc, argv, "pyramid", "opacity");
+  const std::string level_name = pb::option(argc, argv, "level", "continuous");
+  penumbra::require(level_name == "continuous" || level_name == "thesis",
+                    "pnb_bench_occlusion: --level " + level_name + "; expected continuous or thesis");
   penumbra::require(pyramid_name == "opacity" || pyramid_name == "extinction" || pyramid_name == "step_opacity",
                     "pnb_bench_occlusion: --pyramid " + pyramid_name + "; expected opacity, extinction or step_opacity");
   pr::PyramidOptions pyramid_options;
@@ -262,6 +266,7 @@ int run(int argc, char** argv) {
     // shadow cones keep alpha = 1.
     if (!shadow) o.attenuation = alpha;
     o.weight = weight;
+    o.level = level_name == "thesis" ? pr::LevelSelection::thesis : pr::LevelSelection::continuous;
     return o;
   };
   int width = 512, height = 512;
@@ -351,6 +356,7 @@ int run(int argc, char** argv) {
     line["alpha"] = alpha;
     line["section_weight"] = weight_name;
     line["pyramid_quantity"] = pyramid_name;
+    line["level_selection"] = level_name;
     line["width"] = width;
     line["height"] = height;
     line["ms_per_frame"] = pb::rounded(pb::median(times));

@@ -297,7 +297,7 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
   if (const json* o = find(j, "occlusion")) {
     const std::string op = child(path, "occlusion");
     only_keys(*o, op, {"aperture", "splits", "grid", "attenuation", "space", "volume_resolution", "shadows",
-                       "shadow_aperture", "shadow_splits"});
+                       "shadow_aperture", "shadow_splits", "level"});
     OcclusionConfig& oc = l.occlusion;
     auto angle = [&](const char* key, double& out) {
       if (const json* a = find(*o, key)) {
@@ -326,6 +326,10 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
     }
     if (const json* r = find(*o, "volume_resolution"))
       oc.volume_resolution = static_cast<int>(integer(*r, child(op, "volume_resolution"), 2, 1024));
+    if (const json* lv = find(*o, "level")) {
+      const std::string v = choice(*lv, child(op, "level"), {"continuous", "thesis"});
+      oc.level = v == "thesis" ? render::LevelSelection::thesis : render::LevelSelection::continuous;
+    }
     if (const json* sh = find(*o, "shadows")) {
       if (!sh->is_boolean()) fail(child(op, "shadows"), "must be true or false");
       oc.shadows = sh->get<bool>();

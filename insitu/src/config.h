@@ -10,6 +10,7 @@
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/vec3.h"
 #include "penumbra/render/light_volume.h"
+#include "penumbra/render/occlusion.h"
 #include "penumbra/render/shading.h"
 #include "penumbra/render/transfer_function.h"
 
@@ -75,6 +76,8 @@ struct OcclusionConfig {
   bool shadows = true;         ///< narrow cones towards each light
   double shadow_aperture_deg = 2.0;
   int shadow_splits = 1;
+  /// Pyramid level a cone section reads: continuous (default) or the thesis's whole levels.
+  render::LevelSelection level = render::LevelSelection::continuous;
 };
 
 /// How rendered samples are lit (insitu/README.md, "lighting").

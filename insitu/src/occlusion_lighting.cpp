@@ -30,6 +30,7 @@ void OcclusionLighting::set_field(const std::vector<float>& scalars, const rende
   m_pyramid = render::ExtinctionPyramid(m_resampler.resample(scalars, tf));
   render::ConeOptions ao = render::ConeOptions::occlusion(m_config.aperture_deg, m_config.splits);
   ao.attenuation = m_config.attenuation;
+  ao.level = m_config.level;
   m_ao_tracer = std::make_unique<render::ConeTracer>(m_pyramid, ao);
   if (m_gpu) {
     if (m_gpu_pyramid)
@@ -42,6 +43,7 @@ void OcclusionLighting::set_field(const std::vector<float>& scalars, const rende
   if (!m_config.shadows || m_lights.empty()) return;
   render::ConeOptions so = render::ConeOptions::shadow(m_config.shadow_aperture_deg, m_config.shadow_splits);
   so.attenuation = m_config.attenuation;
+  so.level = m_config.level;
   m_shadow_tracer = std::make_unique<render::ConeTracer>(m_pyramid, so);
   if (!m_gap_depth) m_gap_depth = std::make_unique<render::GapDepth>(m_mesh);
   m_gap_depth->set_field(scalars, tf);

@@ -91,7 +91,8 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
   // level 0 as long as possible), then read the continuous level lambda = log2(r / (2 sigma0)),
   // sigma_lambda = sigma0 2^lambda = r / 2 -- the per-axis standard deviation of a uniform disc of
   // radius r, so the filter has the section's second moment (occlusion.h, "Level selection") --
-  // blending the two levels around it. Steps are 2.5 sigma_lambda.
+  // blending the two levels around it. Steps are 2.5 sigma_lambda. LevelSelection::thesis rounds
+  // lambda up to a whole level instead.
   if (!(m_length > m_gap)) return;
   const int top = pyramid.levels() - 1;
   int cones = 1;
@@ -99,7 +100,10 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
   for (bool first = true;; first = false) {
     while (cones < o.splits && d * sub_tan(cones, tan_theta) > 2.0 * sigma0) cones = cones == 1 ? 3 : 7;
     const double r = d * sub_tan(cones, tan_theta);
-    const double lambda = std::min(static_cast<double>(top), r > 2.0 * sigma0 ? std::log2(r / (2.0 * sigma0)) : 0.0);
+    double lambda = std::min(static_cast<double>(top), r > 2.0 * sigma0 ? std::log2(r / (2.0 * sigma0)) : 0.0);
+    // The thesis's whole level: the finest l with r <= 2 sigma_l (a hair of tolerance so that
+    // r = 2 sigma_l exactly stays on l despite rounding in log2).
+    if (o.level == LevelSelection::thesis) lambda = std::ceil(lambda - 1e-9);
     int level = static_cast<int>(std::floor(lambda));
     double blend = lambda - level;
     if (level >= top) level = top, blend = 0.0;

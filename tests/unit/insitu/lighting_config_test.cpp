@@ -130,7 +130,7 @@ TEST(LightingConfig, LitStepsWriteALightingColumnAndShadowedImages) {
 TEST(LightingConfig, OcclusionModelIsReadAndChecked) {
   const Config c = parse_config(with_lighting("/tmp/unused", R"({"model": "occlusion",
       "occlusion": {"aperture": 20, "splits": 7, "grid": 32, "space": "volume", "volume_resolution": 16,
-                    "shadows": false, "attenuation": 0.8}})"));
+                    "shadows": false, "attenuation": 0.8, "level": "thesis"}})"));
   ASSERT_TRUE(c.lighting->occlusion_model);
   const OcclusionConfig& o = c.lighting->occlusion;
   EXPECT_EQ(o.aperture_deg, 20);
@@ -140,6 +140,10 @@ TEST(LightingConfig, OcclusionModelIsReadAndChecked) {
   EXPECT_EQ(o.volume_resolution, 16);
   EXPECT_FALSE(o.shadows);
   EXPECT_EQ(o.attenuation, 0.8);
+  EXPECT_EQ(o.level, render::LevelSelection::thesis);
+  EXPECT_EQ(parse_config(with_lighting("/tmp/unused", R"({"model": "occlusion"})")).lighting->occlusion.level,
+            render::LevelSelection::continuous);
+  expect_config_error(R"({"model": "occlusion", "occlusion": {"level": "nearest"}})", "lighting.occlusion.level must be one of");
   expect_config_error(R"({"model": "occlusion", "occlusion": {"splits": 5}})", "lighting.occlusion.splits must be 1, 3 or 7");
   expect_config_error(R"({"model": "occlusion", "occlusion": {"aperture": 90}})", "lighting.occlusion.aperture must be in (0, 90)");
   expect_config_error(R"({"model": "occlusion", "occlusion": {"space": "sky"}})", "lighting.occlusion.space must be one of");

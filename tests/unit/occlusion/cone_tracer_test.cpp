@@ -47,6 +47,35 @@ TEST(ConeTracer, ScheduleFollowsTheThesis) {
   EXPECT_TRUE(saw7);
 }
 
+// LevelSelection::thesis (sec. 3.2.3, appendix A): whole levels only, the finest whose r_c = 2 sigma_l
+// holds the section (2 sigma_{l-1} < r <= 2 sigma_l), one fetch per sample, steps of 2.5 sigma_l.
+TEST(ConeTracer, ThesisLevelsStepAtTwiceSigma) {
+  const ExtinctionPyramid p(grid(65, -1, 1, [](const Vec3d&) { return 0.0; }));
+  const double s0 = p.sigma0();
+  for (int splits : {1, 3, 7}) {
+    ConeOptions o = ConeOptions::occlusion(20.0, splits);
+    o.unfiltered_grid = false;
+    o.level = LevelSelection::thesis;
+    const ConeTracer t(p, o);
+    const auto& s = t.schedule();
+    ASSERT_GT(s.size(), 5u);
+    int climbs = 0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      EXPECT_EQ(s[i].blend, 0.0);
+      const double tan_sub = std::tan(20.0 * kPi / 180) * (s[i].cones == 1 ? 1.0 : (s[i].cones == 3 ? 0.4641016 : 1.0 / 3));
+      const double r = s[i].distance * tan_sub, sigma = s0 * std::exp2(s[i].level);
+      if (s[i].level < p.levels() - 1) EXPECT_LE(r, 2.0 * sigma * (1 + 1e-6)) << "sample " << i;
+      if (s[i].level > 0) EXPECT_GT(r, sigma * (1 - 1e-6)) << "sample " << i;  // 2 sigma_{l-1}
+      if (i == 0) continue;
+      EXPECT_GE(s[i].level, s[i - 1].level);
+      climbs += s[i].level > s[i - 1].level;
+      if (i + 1 < s.size())
+        EXPECT_NEAR(s[i].distance - s[i - 1].distance, 2.5 * s0 * std::exp2(s[i - 1].level), 1e-12);
+    }
+    EXPECT_GE(climbs, 2) << "splits " << splits;
+  }
+}
+
 // Sections narrower than level 0's filter read the unfiltered grid, blended toward level 0 with
 // sigma = max(h / sqrt 6, r / 2) (linear in log2 sigma), in steps of 2.5 times that sigma; from
 // r = 2 sigma0 on, the pyramid's levels as before.
@@ -103,14 +132,16 @@ TEST(ConeTracer, HomogeneousMediumIsExactForEveryApertureAndSplit) {
   for (PyramidQuantity q : {PyramidQuantity::extinction, PyramidQuantity::opacity, PyramidQuantity::step_opacity}) {
     const ExtinctionPyramid p(grid(121, -6, 6, [&](const Vec3d&) { return tau; }), {q});
     for (double aperture : {0.5, 2.0, 10.0, 20.0, 30.0})
-      for (int splits : {1, 3, 7}) {
-        ConeOptions o = ConeOptions::occlusion(aperture, splits);
-        o.length = 1.5;
-        const ConeTracer t(p, o);
-        const double want = std::exp(-tau * (o.length - t.gap()));
-        EXPECT_NEAR(t.transmittance({0.1, -0.2, 0.05}, {1, 2, 3}), want, 1e-5 * want)
-            << "aperture " << aperture << " splits " << splits;
-      }
+      for (int splits : {1, 3, 7})
+        for (LevelSelection level : {LevelSelection::continuous, LevelSelection::thesis}) {
+          ConeOptions o = ConeOptions::occlusion(aperture, splits);
+          o.length = 1.5;
+          o.level = level;
+          const ConeTracer t(p, o);
+          const double want = std::exp(-tau * (o.length - t.gap()));
+          EXPECT_NEAR(t.transmittance({0.1, -0.2, 0.05}, {1, 2, 3}), want, 1e-5 * want)
+              << "aperture " << aperture << " splits " << splits << " thesis levels " << (level == LevelSelection::thesis);
+        }
   }
 }
 

@@ -39,6 +39,8 @@
 // measured as well on that scene but undersizes the filter by up to sqrt(2): a thin plate then
 // reads brighter with 7 cones than with 3, and one cone in a uniform block brighter than Monte
 // Carlo (both tests below catch it). r_c = 2 sigma0 still decides the splits, all on level 0.
+// LevelSelection::thesis keeps the thesis's whole levels (one fetch per sample, steps of 2.5 sigma_l)
+// for comparison: bench/occlusion --level thesis.
 //
 // Below level 0. A section narrower than level 0's filter (r < 2 sigma0: near every apex, and
 // along most of a narrow shadow cone) would read extinction from up to twice its own width
@@ -218,6 +220,12 @@ private:
   double m_build_ms = 0;
 };
 
+/// Which pyramid level a cone section of radius r reads (see "Level selection").
+enum class LevelSelection {
+  continuous,  ///< sigma = r / 2, the two levels around it blended: the default
+  thesis,      ///< one whole level: the finest with r <= r_c = 2 sigma_l (sec. 3.2.3), stepping at r_c
+};
+
 enum class SectionWeight {
   mean,    ///< kappa = 1: tau_s is the section's mean extinction (exact in uniform media)
   thesis,  ///< kappa = (p_r sigma sqrt(2 pi))^2 / (pi r^2), eq. 3-15
@@ -237,6 +245,7 @@ struct ConeOptions {
   /// Global attenuation alpha (eq. 3-17), > 0.
   double attenuation = 1.0;
   SectionWeight weight = SectionWeight::mean;
+  LevelSelection level = LevelSelection::continuous;
   /// Sections narrower than level 0's filter read the unfiltered grid, blended toward level 0
   /// (see "Below level 0" above); false: level 0, as the thesis.
   bool unfiltered_grid = true;
