@@ -13,6 +13,7 @@
 #include "page_methods.h"
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/version.h"
+#include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::compression {
@@ -109,6 +110,7 @@ void FieldWriter::write_page(const EncodedPage& page) {
   require(page.first_step == m_times.size(), "FieldWriter::write_page: page starts at step " +
                                                   std::to_string(page.first_step) + ", expected " +
                                                   std::to_string(m_times.size()));
+  validate_page(page);  // a page the reader would reject is not written
   const auto bytes = detail::serialize_page(page, std::uint32_t(m_pages.size()));
   PageEntry entry{m_offset, bytes.size(), page.first_step, page.step_count, page.method,
                   page.value_min, page.value_max, page.bound};

@@ -5,6 +5,7 @@
 
 #include "byte_io.h"
 #include "crc32.h"
+#include "page_checks.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
 #include "vertex_section.h"
@@ -15,21 +16,6 @@ namespace {
 
 bool has_vq(PageMethod m) { return uses_plain_vq(m); }
 bool has_blocks(PageMethod m) { return has_bit_blocks(m); }
-
-// Exception positions of a patched section strictly increase and lie inside the window: the
-// one-step decoder stops its scan at the first position past the step it wants.
-bool exceptions_increasing(const std::uint8_t* data, const VertexSection& s, const EncodedPage& p) {
-  const std::uint32_t count = p.method == PageMethod::predictive ? p.step_count - 1 : p.step_count;
-  const std::uint32_t pb = position_bits(count);
-  std::uint64_t at = s.values.exception_list;
-  std::int64_t previous = -1;
-  for (std::uint32_t e = 0; e < s.values.exceptions; ++e, at += pb + s.values.exception_width) {
-    const std::int64_t position = read_bits(data, at, pb);
-    if (position <= previous || position >= std::int64_t(count)) return false;
-    previous = position;
-  }
-  return true;
-}
 
 }  // namespace
 
@@ -135,8 +121,6 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     r.get_array(p.mean_q, N);
     r.get_array(p.i8, N);
     r.get_array(p.iw, N);
-    for (std::uint64_t v = 0; v < N; ++v)
-      if (p.i8[v] >= K || p.iw[v] >= K) r.fail("codebook index out of range at vertex " + std::to_string(v));
   }
   if (uses_aligned_vq(p.method)) {
     if (W > kMaxAlignedWindow) r.fail("shift-aligned page with a window over 256 steps");
@@ -151,55 +135,22 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     r.get_array(p.mean_q, N);
     r.get_array(p.shift, N);
     r.get_array(p.ia, N);
-    for (std::uint64_t v = 0; v < N; ++v)
-      if (p.ia[v] >= K || p.shift[v] >= h.step_count)
-        r.fail("aligned codebook index or shift out of range at vertex " + std::to_string(v));
   }
   if (has_blocks(p.method)) {
     p.step = r.get<float>();
     p.lo = r.get<float>();
     p.first_width = r.get<std::uint32_t>();
     r.get<std::uint32_t>();
-    if (p.method == PageMethod::predictive && (p.first_width < 1 || p.first_width > 31))
-      r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
-    if (!std::isfinite(p.step) || !std::isfinite(p.lo)) r.fail("non-finite quantisation step");
     const std::uint64_t groups = (N + BitBlocks::kGroupSize - 1) / BitBlocks::kGroupSize;
     r.get_array(p.blocks.group_offsets, groups + 1);
     r.get_array(p.blocks.widths, (N + 1) / 2);
-    const std::uint64_t payload_bytes = p.blocks.group_offsets.back();
-    if (payload_bytes != r.remaining()) r.fail("bit payload size does not match its group table");
-    if (p.blocks.group_offsets[0] != 0) r.fail("bit payload does not start at 0");
-    for (std::uint64_t g = 0; g < groups; ++g)
-      if (p.blocks.group_offsets[g] > p.blocks.group_offsets[g + 1] || p.blocks.group_offsets[g + 1] > payload_bytes)
-        r.fail("group table is not increasing at vertex group " + std::to_string(g));
-    r.get_array(p.blocks.payload, payload_bytes, 8);
-    // Every group's sections must fill exactly its bytes, each parsed without reading past
-    // its group: the decoder then never reads outside the payload.
-    VertexSection s;
-    // A group holds at most 128 raw sections of 1024 float32 values: 2^22 bits, so the
-    // per-vertex offsets fit 32 bits.
-    p.blocks.section_bits.resize(N);
-    for (std::uint64_t g = 0; g < groups; ++g) {
-      std::uint64_t pos = p.blocks.group_offsets[g] * 8;
-      const std::uint64_t limit = p.blocks.group_offsets[g + 1] * 8;
-      for (std::uint64_t v = g * BitBlocks::kGroupSize; v < std::min(N, (g + 1) * BitBlocks::kGroupSize); ++v) {
-        p.blocks.section_bits[v] = std::uint32_t(pos - p.blocks.group_offsets[g] * 8);
-        if (!parse_vertex(p, p.blocks.payload.data(), pos, p.blocks.width(v), limit, s))
-          r.fail("bits of vertex " + std::to_string(v) + " run past their group");
-        // A patched section always has an exception (the encoder patches only to store one); one
-        // without any would decode as width-0 plain in lanes but be skipped by the scalar path,
-        // which differ in the sign of a zero.
-        if (s.code == kPatchedCode && s.values.exceptions == 0)
-          r.fail("patched section of vertex " + std::to_string(v) + " has no exceptions");
-        if (s.code == kPatchedCode && !exceptions_increasing(p.blocks.payload.data(), s, p))
-          r.fail("exception list of vertex " + std::to_string(v) + " is out of order");
-        pos = s.end;
-      }
-      if ((pos + 7) / 8 != p.blocks.group_offsets[g + 1])
-        r.fail("bit block of vertex group " + std::to_string(g) + " has the wrong size");
-    }
+    if (p.blocks.group_offsets.back() != r.remaining()) r.fail("bit payload size does not match its group table");
+    r.get_array(p.blocks.payload, p.blocks.group_offsets.back(), 8);
   }
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the payload");
+  // Value by value, after the bytes: the section walk also derives each section's start.
+  const std::string error = page_contents_error(p, &p.blocks.section_bits);
+  if (!error.empty()) r.fail(error);
   return p;
 }
 

@@ -26,9 +26,10 @@ constexpr std::uint32_t kMaxAlignedWindow = 256;
 
 /// Throws Error(invalid_argument), naming `call`, unless the page's shape is one the decoders
 /// can read without going out of bounds: a known method, a window that is a multiple of 8 in
-/// [8, 1024], 1 <= step_count <= window, codebooks of 1..256 entries, and every array of the
-/// size the method needs. O(1): pages from a file were checked value by value when parsed; this
-/// guards pages a caller assembled by hand.
+/// [8, 1024], 1 <= step_count <= window, codebooks of 2..256 entries, and every array of the
+/// size the method needs. O(1), so that it can run for every step: pages from a file were
+/// checked value by value when parsed; a page assembled by hand gets that check from
+/// validate_page (window_codec.h), and this keeps a wrongly shaped one from being read at all.
 void require_decodable(const EncodedPage& p, const char* call);
 
 }  // namespace penumbra::compression::detail

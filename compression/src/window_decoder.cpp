@@ -6,6 +6,7 @@
 
 #include "bit_io.h"
 #include "cursor_state.h"
+#include "page_checks.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
 #include "section_lanes.h"
@@ -214,6 +215,14 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     if (p.blocks.payload.size() < p.blocks.group_offsets.back() + 8)
       fail("bit payload shorter than its groups plus 8 bytes of padding");
   }
+}
+
+void validate_page(const EncodedPage& p) {
+  detail::require_decodable(p, "validate_page");
+  require(p.times.size() == p.step_count, "validate_page: " + std::to_string(p.times.size()) + " time values for " +
+                                              std::to_string(p.step_count) + " steps");
+  const std::string error = detail::page_contents_error(p, nullptr);
+  require(error.empty(), "validate_page: " + error);
 }
 
 void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {

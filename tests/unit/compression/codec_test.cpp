@@ -259,6 +259,58 @@ TEST(WindowCodec, MalformedPagesAreRejectedByEveryDecoder) {
   expect_rejected(bad, "mean_q holds 3");
 }
 
+// What the decoders trust without looking (they run per step, so they check only the shape):
+// validate_page finds it in a page edited by hand, naming the fault and the vertex.
+TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
+  const auto f = testing::smooth_blobs(300, 16);
+  CodecParams p;
+  p.window = 16;
+  p.codebook_size = 8;
+  p.aligned = false;
+  const EncodedPage vq = encode(f, 0, 16, p);
+  ASSERT_TRUE(vq.method == PageMethod::vq) << to_string(vq.method);
+  const EncodedPage blocks = encode(f, 0, 16, p, 1e-4f * f.range());
+  ASSERT_TRUE(blocks.method == PageMethod::vq_residual || blocks.method == PageMethod::predictive)
+      << to_string(blocks.method);
+  auto expect_invalid = [](const EncodedPage& bad, const std::string& what) {
+    try {
+      validate_page(bad);
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument) << what;
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  EXPECT_NO_THROW(validate_page(vq));
+  EXPECT_NO_THROW(validate_page(blocks));
+  EncodedPage bad = vq;
+  bad.iw[7] = 8;  // one past the codebook: the decoders would read past cw
+  expect_invalid(bad, "codebook index out of range at vertex 7");
+  bad = vq;
+  bad.times.pop_back();
+  expect_invalid(bad, "15 time values for 16 steps");
+  bad = vq;
+  bad.window = 4;  // the shape check runs first
+  expect_invalid(bad, "window 4");
+  bad = blocks;
+  bad.blocks.section_bits[130] += 1;  // the second group's second vertex
+  expect_invalid(bad, "section_bits does not match where the section starts at vertex 130");
+  bad = blocks;
+  bad.blocks.widths[2] |= 0xF;  // vertex 4 raw: 16 float32 values push every later section on
+  expect_invalid(bad, "section_bits does not match where the section starts at vertex 5");
+  bad = blocks;
+  bad.blocks.widths[149] |= 0xF0;  // the last vertex raw: more bits than its group holds
+  expect_invalid(bad, "bits of vertex 299 run past their group");
+  bad = blocks;
+  bad.blocks.group_offsets[1] = bad.blocks.group_offsets[2] + 1;
+  expect_invalid(bad, "group table is not increasing at vertex group 1");
+  if (blocks.method == PageMethod::predictive) {
+    bad = blocks;
+    bad.first_width = 40;
+    expect_invalid(bad, "first-value width 40");
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::compression
 

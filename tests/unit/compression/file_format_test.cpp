@@ -164,6 +164,45 @@ TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
   }
 }
 
+// FieldWriter checks every page as the reader will (validate_page): a bad page written would
+// make the rest of the run unreadable. The refused page leaves the file as it was.
+TEST(FieldFile, WriterRefusesAPageTheReaderWouldReject) {
+  const auto f = testing::smooth_blobs(50, 16);
+  const CodecParams params = small_params();
+  const std::string path = temp_path("refused.pnbf");
+  FieldInfo info;
+  info.name = "t";
+  info.vertex_count = f.vertices;
+  info.window = params.window;
+  info.codebook_size = params.codebook_size;
+  FieldWriter w(path, info);
+  const auto page0 = encode_window(f.values.data(), f.vertices, 8, f.times.data(), 0, params, 0.f);
+  w.write_page(page0);
+  const std::uint64_t written = w.bytes_written();
+  auto page1 = encode_window(f.values.data() + 8 * f.vertices, f.vertices, 8, f.times.data() + 8, 8, params, 0.f);
+  EncodedPage bad = page1;
+  if (bad.method == PageMethod::vq)
+    bad.i8[3] = 200;
+  else
+    bad.ia[3] = 200;
+  try {
+    w.write_page(bad);
+    FAIL() << "an out-of-range codebook index was written";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(std::string(e.what()).find("out of range at vertex 3"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(w.bytes_written(), written);
+  w.write_page(page1);
+  w.finish();
+  const auto field = CompressedField::open(path);
+  ASSERT_EQ(field->step_count(), 16u);
+  std::vector<float> a(f.vertices), b(f.vertices);
+  field->read_step(9, a.data());
+  decode_step(page1, 1, b.data());
+  EXPECT_EQ(a, b);
+}
+
 TEST(FieldFile, NotAFieldFileAndMissingFileAreClearErrors) {
   const std::string path = temp_path("junk.pnbf");
   const std::string junk(200, 'x');

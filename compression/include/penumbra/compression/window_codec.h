@@ -78,6 +78,15 @@ void set_vector_decode(bool enabled);
 /// True when the vector decoders run (the CPU has AVX2 and set_vector_decode left them on).
 bool vector_decode_active();
 
+/// Checks a page value by value: its shape (every array the size its method needs), times for
+/// each step, codebook indices and shifts in range, and bit blocks whose every section parses
+/// inside its group and starts where section_bits says. Throws Error(invalid_argument) naming
+/// the first fault. O(vertices + bits). The decoders check only a page's shape, in O(1), since
+/// they run per step; pages from encode_window and from a file (parsed with this same check)
+/// need nothing more, but a page assembled or edited by hand must pass this before it is
+/// decoded, or a wrong index reads outside the codebooks. FieldWriter::write_page runs it.
+void validate_page(const EncodedPage& page);
+
 /// Decodes the whole window, step-major: out[t * vertex_count + v], t < step_count.
 void decode_window(const EncodedPage& page, float* out);
 /// Decodes one vertex's step_count values (random access to one vertex-window).
