@@ -13,11 +13,16 @@
 #include <thread>
 #include <vector>
 
-#include <unistd.h>
+#include <pthread.h>
 
 namespace penumbra {
 
 namespace {
+
+// Set in the child of a fork (pthread_atfork, registered with the pool): the child has none of the
+// parent's workers. A flag rather than comparing getpid() per call, which is a system call (about
+// 1 us on a virtual machine with page-table isolation) in every parallel_for.
+std::atomic<bool> g_forked_child{false};
 
 // Threads kept between calls: starting a thread costs about 40 us, which a one-step decode of
 // 100K vertices (about 250 us) or a light-volume piece of a frame budget cannot absorb. One job
@@ -37,7 +42,7 @@ public:
   /// pool is busy or too small, or in a forked child, which has none of the workers (and whose
   /// copy of the mutex may have been held by another parent thread at the fork).
   bool try_run(unsigned helpers, const std::function<void()>& work) {
-    if (::getpid() != m_pid) return false;
+    if (g_forked_child.load(std::memory_order_relaxed)) return false;
     {
       std::lock_guard<std::mutex> lock(m_mutex);
       if (m_busy || helpers > m_threads.size()) return false;
@@ -62,7 +67,8 @@ public:
   }
 
 private:
-  explicit WorkerPool(unsigned threads) : m_pid(::getpid()) {
+  explicit WorkerPool(unsigned threads) {
+    pthread_atfork(nullptr, nullptr, [] { g_forked_child.store(true, std::memory_order_relaxed); });
     // Fewer workers if the system refuses threads (a container's limit): never an abort.
     for (unsigned i = 0; i < threads; ++i) {
       try {
@@ -117,7 +123,6 @@ private:
   std::atomic<unsigned> m_running{0};            // changed under m_mutex; polled without it
   std::atomic<std::uint64_t> m_generation{0};    // likewise
   bool m_busy = false;
-  const pid_t m_pid;
 };
 
 }  // namespace
@@ -127,7 +132,10 @@ unsigned worker_count() {
     const int n = std::atoi(env);
     if (n > 0) return static_cast<unsigned>(n);
   }
-  return std::max(1u, std::thread::hardware_concurrency());
+  // Read once: glibc counts the online CPUs from /sys at every call (open, read, close: 6 us on
+  // a virtual machine with page-table isolation), and every parallel_for asks.
+  static const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  return hardware;
 }
 
 void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& body) {
