@@ -26,6 +26,16 @@ void add_rows8(const float* table, const std::int32_t* row, const float* base, s
 /// out[i] = level[i] + table[offset[i]] (an aligned page's full-window decode).
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out);
 
+/// A whole plain-VQ window, 8 vertices at a time: out[t * stride + i] = vq_value(mean, D8, D_W)
+/// for t < steps and i < count. Each vertex's D8 row (8 floats: one per block of steps) and each
+/// run of eight steps of its D_W row is one contiguous read, transposed in registers into the
+/// step rows; nothing is gathered. Returns false, doing nothing, where it does not apply (no
+/// lanes, fewer than 8 vertices, or a window that is not a multiple of 64, whose runs of eight
+/// steps would straddle two D8 blocks).
+bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
+               const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
+               std::uint64_t stride, std::uint32_t steps);
+
 /// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i] * 8] (mean + D8 of a block of steps;
 /// `t8` is the D8 codebook at the block's column).
 void mean_plus_entries(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,

@@ -252,7 +252,8 @@ void decode_window(const EncodedPage& p, float* out) {
   // Chunks of whole groups: each writes its vertex range of every step row.
   constexpr std::uint64_t kChunk = kGroup * 64;
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
-    if (is_vq(p)) {
+    if (is_vq(p) && !detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data(),
+                                       p.i8.data() + b, p.cw.data(), p.window, p.iw.data() + b, e - b, out + b, N, n)) {
       // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
       // then each step adds its D_W value (same float operations as vq_value), eight steps at a
       // time where they share a block.
