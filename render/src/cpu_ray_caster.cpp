@@ -52,7 +52,6 @@ struct WalkStats {
   double length = 0;
   int segments = 0;
   int entries = 0;
-  int aborted = 0;
 };
 
 // A segment walked but not yet integrated: a ray walks up to kPendingSegments tets, then
@@ -393,7 +392,6 @@ template <bool kShaded, class Geometry>
   if (t_out <= c.t_in) {
     t_out = c.t_in;
     if (++c.zero_steps > kMaxZeroLengthSteps) {
-      ++stats.aborted;
       c.stuck = true;
       return false;
     }
@@ -451,10 +449,7 @@ template <bool kShaded, class Geometry>
   if (next < 0) return false;
   c.tet = next >> 2;
   c.k = next & 3;
-  if (c.steps++ == tets.size()) {  // a straight line meets each tet only once
-    ++stats.aborted;
-    return false;
-  }
+  if (c.steps++ == tets.size()) return false;  // a straight line meets each tet only once
   return true;
 }
 
