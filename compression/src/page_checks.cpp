@@ -41,7 +41,9 @@ std::string sections_error(const EncodedPage& p, std::vector<std::uint32_t>* der
     if (b.group_offsets[g] > b.group_offsets[g + 1])
       return "group table is not increasing at vertex group " + std::to_string(g);
   // The decoders read up to 8 bytes past a section's last bit.
-  if (b.payload.size() < b.group_offsets.back() + 8) return "bit payload shorter than its groups plus 8 bytes of padding";
+  // Written so that a huge offset cannot wrap around.
+  if (b.payload.size() < 8 || b.group_offsets.back() > b.payload.size() - 8)
+    return "bit payload shorter than its groups plus 8 bytes of padding";
   if (derive) derive->resize(N);
   // Every group's sections must fill exactly its bytes, each parsed without reading past its
   // group: the decoders then never read outside the payload. A group holds at most 128 raw

@@ -180,13 +180,9 @@ template <std::uint64_t kWidth>
 struct WindowChunk {
   static constexpr std::uint64_t kLanesPerChunk = kWidth;
   alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
-  std::vector<std::uint32_t> z;  ///< value i of lane j at z[i * kWidth + j]
-
-  // The chunk is thread_local and the worker threads are kept for the life of the process:
-  // long windows (up to 1024 steps, 4 MiB at 1024 lanes) give their buffer back after use.
-  void release_if_large() {
-    if (z.size() * sizeof(std::uint32_t) > (std::size_t(1) << 20)) std::vector<std::uint32_t>().swap(z);
-  }
+  /// Value i of lane j at z[i * kWidth + j]. Thread-local and kept for the life of the worker
+  /// threads: at most 256 KiB (64 lanes, 1024 steps).
+  std::vector<std::uint32_t> z;
 };
 
 // The low 32 bits of the 64-bit lanes of a, then of b, in lane order.
@@ -412,7 +408,6 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
         store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load(z + j)), step), adds));
       }
   }
-  c.release_if_large();
 }
 
 __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
@@ -445,7 +440,6 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
       }
     }
   }
-  c.release_if_large();
 }
 
 __attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,

@@ -212,7 +212,7 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     sized(p.blocks.widths.size(), (N + 1) / 2, "widths");
     sized(p.blocks.section_bits.size(), N, "section_bits");
     sized(p.blocks.group_offsets.size(), groups + 1, "group_offsets");
-    if (p.blocks.payload.size() < p.blocks.group_offsets.back() + 8)
+    if (p.blocks.payload.size() < 8 || p.blocks.group_offsets.back() > p.blocks.payload.size() - 8)
       fail("bit payload shorter than its groups plus 8 bytes of padding");
   }
 }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <pthread.h>
+#include <unistd.h>
 
 namespace penumbra {
 
@@ -21,7 +22,9 @@ namespace {
 
 // Set in the child of a fork (pthread_atfork, registered with the pool): the child has none of the
 // parent's workers. A flag rather than comparing getpid() per call, which is a system call (about
-// 1 us on a virtual machine with page-table isolation) in every parallel_for.
+// 1 us on a virtual machine with page-table isolation) in every parallel_for. A child made by a
+// raw clone() runs no fork handlers and is not detected: it would find the pool busy or wait on
+// workers it does not have.
 std::atomic<bool> g_forked_child{false};
 
 // Threads kept between calls: starting a thread costs about 40 us, which a one-step decode of
@@ -43,6 +46,7 @@ public:
   /// copy of the mutex may have been held by another parent thread at the fork).
   bool try_run(unsigned helpers, const std::function<void()>& work) {
     if (g_forked_child.load(std::memory_order_relaxed)) return false;
+    if (!m_fork_handler && ::getpid() != m_pid) return false;
     {
       std::lock_guard<std::mutex> lock(m_mutex);
       if (m_busy || helpers > m_threads.size()) return false;
@@ -67,8 +71,9 @@ public:
   }
 
 private:
-  explicit WorkerPool(unsigned threads) {
-    pthread_atfork(nullptr, nullptr, [] { g_forked_child.store(true, std::memory_order_relaxed); });
+  explicit WorkerPool(unsigned threads)
+      : m_fork_handler(pthread_atfork(nullptr, nullptr, [] { g_forked_child.store(true, std::memory_order_relaxed); }) == 0),
+        m_pid(::getpid()) {
     // Fewer workers if the system refuses threads (a container's limit): never an abort.
     for (unsigned i = 0; i < threads; ++i) {
       try {
@@ -123,6 +128,8 @@ private:
   std::atomic<unsigned> m_running{0};            // changed under m_mutex; polled without it
   std::atomic<std::uint64_t> m_generation{0};    // likewise
   bool m_busy = false;
+  const bool m_fork_handler;  // false: pthread_atfork refused, so compare the pid instead
+  const pid_t m_pid;
 };
 
 }  // namespace

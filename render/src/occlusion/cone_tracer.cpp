@@ -108,7 +108,7 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
     double blend = lambda - level;
     if (level >= top) level = top, blend = 0.0;
     double sigma = sigma0 * std::exp2(lambda);
-    if (o.unfiltered_grid && r < 2.0 * sigma0 && pyramid.fine().sigma < sigma0) {
+    if (o.unfiltered_grid && o.level == LevelSelection::continuous && r < 2.0 * sigma0 && pyramid.fine().sigma < sigma0) {
       // Narrower than level 0's filter: the unfiltered grid, blended toward level 0 linearly in
       // log2 sigma (occlusion.h, "Below level 0").
       const double fine = pyramid.fine().sigma;

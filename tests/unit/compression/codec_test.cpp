@@ -293,7 +293,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   bad.window = 4;  // the shape check runs first
   expect_invalid(bad, "window 4");
   bad = blocks;
-  bad.blocks.section_bits[130] += 1;  // the second group's second vertex
+  bad.blocks.section_bits[130] += 1;  // the second group's third vertex
   expect_invalid(bad, "section_bits does not match where the section starts at vertex 130");
   bad = blocks;
   bad.blocks.widths[2] |= 0xF;  // vertex 4 raw: 16 float32 values push every later section on
@@ -302,6 +302,12 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   bad.blocks.widths[149] |= 0xF0;  // the last vertex raw: more bits than its group holds
   expect_invalid(bad, "bits of vertex 299 run past their group");
   bad = blocks;
+  bad.step = std::numeric_limits<float>::infinity();
+  expect_invalid(bad, "non-finite quantisation step");
+  bad = blocks;
+  bad.blocks.group_offsets.back() = ~std::uint64_t(0) - 4;  // would wrap around in `back() + 8`
+  expect_invalid(bad, "bit payload shorter than its groups");
+  bad = blocks;
   bad.blocks.group_offsets[1] = bad.blocks.group_offsets[2] + 1;
   expect_invalid(bad, "group table is not increasing at vertex group 1");
   if (blocks.method == PageMethod::predictive) {
@@ -309,6 +315,15 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
     bad.first_width = 40;
     expect_invalid(bad, "first-value width 40");
   }
+  // An aligned page: a shift must fall inside the page's steps.
+  CodecParams aligned = p;
+  aligned.aligned = true;
+  const EncodedPage shifted = encode(testing::shock_front(300, 16), 0, 16, aligned);
+  ASSERT_EQ(shifted.method, PageMethod::vq_aligned) << to_string(shifted.method);
+  EXPECT_NO_THROW(validate_page(shifted));
+  bad = shifted;
+  bad.shift[11] = 16;
+  expect_invalid(bad, "aligned codebook index or shift out of range at vertex 11");
 }
 
 }  // namespace

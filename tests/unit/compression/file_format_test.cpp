@@ -180,6 +180,7 @@ TEST(FieldFile, WriterRefusesAPageTheReaderWouldReject) {
   w.write_page(page0);
   const std::uint64_t written = w.bytes_written();
   auto page1 = encode_window(f.values.data() + 8 * f.vertices, f.vertices, 8, f.times.data() + 8, 8, params, 0.f);
+  ASSERT_TRUE(page1.method == PageMethod::vq || page1.method == PageMethod::vq_aligned) << to_string(page1.method);
   EncodedPage bad = page1;
   if (bad.method == PageMethod::vq)
     bad.i8[3] = 200;

@@ -53,8 +53,7 @@ TEST(ConeTracer, ThesisLevelsStepAtTwiceSigma) {
   const ExtinctionPyramid p(grid(65, -1, 1, [](const Vec3d&) { return 0.0; }));
   const double s0 = p.sigma0();
   for (int splits : {1, 3, 7}) {
-    ConeOptions o = ConeOptions::occlusion(20.0, splits);
-    o.unfiltered_grid = false;
+    ConeOptions o = ConeOptions::occlusion(20.0, splits);  // unfiltered_grid left on: thesis ignores it
     o.level = LevelSelection::thesis;
     const ConeTracer t(p, o);
     const auto& s = t.schedule();
@@ -62,6 +61,7 @@ TEST(ConeTracer, ThesisLevelsStepAtTwiceSigma) {
     int climbs = 0;
     for (std::size_t i = 0; i < s.size(); ++i) {
       EXPECT_EQ(s[i].blend, 0.0);
+      EXPECT_GE(s[i].level, 0) << "sample " << i;  // level 0 near the apex, never the unfiltered grid
       const double tan_sub = std::tan(20.0 * kPi / 180) * (s[i].cones == 1 ? 1.0 : (s[i].cones == 3 ? 0.4641016 : 1.0 / 3));
       const double r = s[i].distance * tan_sub, sigma = s0 * std::exp2(s[i].level);
       if (s[i].level < p.levels() - 1) EXPECT_LE(r, 2.0 * sigma * (1 + 1e-6)) << "sample " << i;

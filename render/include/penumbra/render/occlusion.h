@@ -39,8 +39,8 @@
 // measured as well on that scene but undersizes the filter by up to sqrt(2): a thin plate then
 // reads brighter with 7 cones than with 3, and one cone in a uniform block brighter than Monte
 // Carlo (both tests below catch it). r_c = 2 sigma0 still decides the splits, all on level 0.
-// LevelSelection::thesis keeps the thesis's whole levels (one fetch per sample, steps of 2.5 sigma_l)
-// for comparison: bench/occlusion --level thesis.
+// LevelSelection::thesis keeps the thesis's schedule for comparison (bench/occlusion --level thesis):
+// whole levels, level 0 below r_c = 2 sigma0 as well, one fetch per sample, steps of 2.5 sigma_l.
 //
 // Below level 0. A section narrower than level 0's filter (r < 2 sigma0: near every apex, and
 // along most of a narrow shadow cone) would read extinction from up to twice its own width
@@ -223,7 +223,9 @@ private:
 /// Which pyramid level a cone section of radius r reads (see "Level selection").
 enum class LevelSelection {
   continuous,  ///< sigma = r / 2, the two levels around it blended: the default
-  thesis,      ///< one whole level: the finest with r <= r_c = 2 sigma_l (sec. 3.2.3), stepping at r_c
+  /// One whole level: the finest with r <= r_c = 2 sigma_l (sec. 3.2.3), stepping at r_c; level 0
+  /// for sections narrower than 2 sigma0 too (unfiltered_grid does not apply): the thesis's schedule.
+  thesis,
 };
 
 enum class SectionWeight {
@@ -247,7 +249,7 @@ struct ConeOptions {
   SectionWeight weight = SectionWeight::mean;
   LevelSelection level = LevelSelection::continuous;
   /// Sections narrower than level 0's filter read the unfiltered grid, blended toward level 0
-  /// (see "Below level 0" above); false: level 0, as the thesis.
+  /// (see "Below level 0" above); false: level 0, as the thesis. Continuous levels only.
   bool unfiltered_grid = true;
   /// Unresolved lateral variance (see "Lateral variance" above): each final sub-cone lets through
   /// the mean transmittance of a gamma-distributed depth whose variance is estimated from the
