@@ -88,17 +88,21 @@ TEST_F(GpuConeTracerTest, RandomPointsOnAResampledSceneAgreeWithTheCpu) {
   const auto points = random_points(2000, {-1.1, -1.1, -1.1}, {1.1, 1.1, 1.1}, 7);
   const Vec3d eye{2.5, -3.0, 4.0};
   double worst = 0;
-  for (int splits : {1, 3, 7}) {
-    const GpuConeTracer t(gp, ConeOptions::occlusion(25.0, splits));
-    const std::vector<float> gpu = t.transmittance(ConeTarget::towards_eye(eye), points);
-    const double d =
-        max_difference(gpu, points, [&](const Vec3d& x) { return directional_occlusion(t.host(), x, eye); });
-    EXPECT_LT(d, kAgreement) << "occlusion, splits " << splits;
-    // Not a comparison of ones: the ball hides a good share of the points from the eye.
-    const auto dark = std::count_if(gpu.begin(), gpu.end(), [](float v) { return v < 0.5f; });
-    EXPECT_GT(dark, 100) << "splits " << splits;
-    worst = std::max(worst, d);
-  }
+  for (LevelSelection level : {LevelSelection::continuous, LevelSelection::thesis})
+    for (int splits : {1, 3, 7}) {
+      ConeOptions o = ConeOptions::occlusion(25.0, splits);
+      o.level = level;
+      const GpuConeTracer t(gp, o);
+      const std::vector<float> gpu = t.transmittance(ConeTarget::towards_eye(eye), points);
+      const double d =
+          max_difference(gpu, points, [&](const Vec3d& x) { return directional_occlusion(t.host(), x, eye); });
+      const bool thesis = level == LevelSelection::thesis;
+      EXPECT_LT(d, kAgreement) << "occlusion, splits " << splits << ", thesis levels " << thesis;
+      // Not a comparison of ones: the ball hides a good share of the points from the eye.
+      const auto dark = std::count_if(gpu.begin(), gpu.end(), [](float v) { return v < 0.5f; });
+      EXPECT_GT(dark, 100) << "splits " << splits << ", thesis levels " << thesis;
+      worst = std::max(worst, d);
+    }
   const GpuConeTracer s(gp, ConeOptions::shadow(2.0, 3));
   const ShadowLight lights[] = {{ShadowLight::Kind::directional, {-0.3, 0.2, -1.0}},
                                 {ShadowLight::Kind::point, {0.9, 0.8, 1.0}},
@@ -118,7 +122,7 @@ TEST_F(GpuConeTracerTest, RandomPointsOnAResampledSceneAgreeWithTheCpu) {
     EXPECT_LT(d, kAgreement) << "shadow, light kind " << static_cast<int>(light.kind);
     worst = std::max(worst, d);
   }
-  std::printf("[gpu-cone] %zu random points, AO splits 1/3/7 and 3 lights: max |GPU - CPU| = %.2e\n", points.size(),
+  std::printf("[gpu-cone] %zu random points, AO splits 1/3/7 (both level selections) and 3 lights: max |GPU - CPU| = %.2e\n", points.size(),
               worst);
 }
 
