@@ -33,17 +33,12 @@ std::string sections_error(const EncodedPage& p, std::vector<std::uint32_t>* der
   if (p.method == PageMethod::predictive && (p.first_width < 1 || p.first_width > 31))
     return "first-value width " + std::to_string(p.first_width) + " outside 1..31";
   if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
-  if (b.group_offsets.size() != groups + 1 || b.widths.size() != (N + 1) / 2 ||
-      (!derive && b.section_bits.size() != N))
-    return "bit block tables of the wrong size";
+  // The tables' sizes and the payload's padding past group_offsets.back() are the page's shape,
+  // already checked (see page_contents_error).
   if (b.group_offsets[0] != 0) return "bit payload does not start at 0";
   for (std::uint64_t g = 0; g < groups; ++g)
     if (b.group_offsets[g] > b.group_offsets[g + 1])
       return "group table is not increasing at vertex group " + std::to_string(g);
-  // The decoders read up to 8 bytes past a section's last bit.
-  // Written so that a huge offset cannot wrap around.
-  if (b.payload.size() < 8 || b.group_offsets.back() > b.payload.size() - 8)
-    return "bit payload shorter than its groups plus 8 bytes of padding";
   if (derive) derive->resize(N);
   // Every group's sections must fill exactly its bytes, each parsed without reading past its
   // group: the decoders then never read outside the payload. A group holds at most 128 raw
