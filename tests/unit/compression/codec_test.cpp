@@ -8,6 +8,7 @@
 #include "penumbra/compression/lbg.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
+#include "expect_error.h"
 #include "test_fields.h"
 
 namespace penumbra::compression {
@@ -189,13 +190,8 @@ TEST(WindowCodec, FixedSeedGivesIdenticalPages) {
 TEST(WindowCodec, NonFiniteInputIsRejectedNamingStepAndVertex) {
   auto f = testing::smooth_blobs(500, 16);
   f.values[5 * 500 + 42] = std::numeric_limits<float>::quiet_NaN();
-  try {
-    encode(f, 0, 16, CodecParams{});
-    FAIL() << "NaN accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
-    EXPECT_NE(std::string(e.what()).find("step 5, vertex 42 is NaN"), std::string::npos) << e.what();
-  }
+  testing::expect_error([&] { encode(f, 0, 16, CodecParams{}); }, ErrorCode::invalid_argument,
+                        {"step 5, vertex 42 is NaN"}, "NaN");
   f.values[5 * 500 + 42] = std::numeric_limits<float>::infinity();
   EXPECT_THROW(encode(f, 0, 16, CodecParams{}), Error);
 }
@@ -224,18 +220,15 @@ TEST(WindowCodec, MalformedPagesAreRejectedByEveryDecoder) {
   std::vector<float> out(f.vertices * 16);
   ASSERT_NO_THROW(decode_window(good, out.data()));
   auto expect_rejected = [&](const EncodedPage& bad, const std::string& what) {
-    for (int call = 0; call < 4; ++call) {
-      try {
-        if (call == 0) decode_window(bad, out.data());
-        if (call == 1) decode_step(bad, 0, out.data());
-        if (call == 2) decode_vertex(bad, 0, out.data());
-        if (call == 3) StepCursor().decode(std::make_shared<const EncodedPage>(bad), 0, out.data());
-        ADD_FAILURE() << what << ": accepted by decoder " << call;
-      } catch (const Error& e) {
-        EXPECT_EQ(e.code(), ErrorCode::invalid_argument) << what;
-        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-      }
-    }
+    for (int call = 0; call < 4; ++call)
+      testing::expect_error(
+          [&] {
+            if (call == 0) decode_window(bad, out.data());
+            if (call == 1) decode_step(bad, 0, out.data());
+            if (call == 2) decode_vertex(bad, 0, out.data());
+            if (call == 3) StepCursor().decode(std::make_shared<const EncodedPage>(bad), 0, out.data());
+          },
+          ErrorCode::invalid_argument, {what}, what + ", decoder " + std::to_string(call));
   };
   EncodedPage bad = good;
   bad.window = 4;  // W / 8 would be 0: a division by zero in the decoders
@@ -273,13 +266,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   ASSERT_TRUE(blocks.method == PageMethod::vq_residual || blocks.method == PageMethod::predictive)
       << to_string(blocks.method);
   auto expect_invalid = [](const EncodedPage& bad, const std::string& what) {
-    try {
-      validate_page(bad);
-      ADD_FAILURE() << what << ": accepted";
-    } catch (const Error& e) {
-      EXPECT_EQ(e.code(), ErrorCode::invalid_argument) << what;
-      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-    }
+    testing::expect_error([&] { validate_page(bad); }, ErrorCode::invalid_argument, {what}, what);
   };
   EXPECT_NO_THROW(validate_page(vq));
   EXPECT_NO_THROW(validate_page(blocks));

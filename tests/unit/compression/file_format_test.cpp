@@ -10,6 +10,7 @@
 #include "bit_blocks_builder.h"
 #include "page_format.h"
 #include "value_layout.h"
+#include "expect_error.h"
 #include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
@@ -153,15 +154,12 @@ TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
   const auto bytes = detail::serialize_page(page, 0);
   detail::PageHeader header;
   ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
-  try {
-    detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, f.vertices, 8, 4, "page 0",
-                               std::uint32_t(PageMethod::vq_aligned_residual));
-    FAIL() << "a patched section without exceptions was accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::io_error);
-    EXPECT_NE(std::string(e.what()).find("vertex 5"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("no exceptions"), std::string::npos) << e.what();
-  }
+  testing::expect_error(
+      [&] {
+        detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, f.vertices, 8, 4, "page 0",
+                                   std::uint32_t(PageMethod::vq_aligned_residual));
+      },
+      ErrorCode::io_error, {"vertex 5", "no exceptions"}, "a patched section without exceptions");
 }
 
 // FieldWriter checks every page as the reader will (validate_page): a bad page written would
@@ -186,13 +184,8 @@ TEST(FieldFile, WriterRefusesAPageTheReaderWouldReject) {
     bad.i8[3] = 200;
   else
     bad.ia[3] = 200;
-  try {
-    w.write_page(bad);
-    FAIL() << "an out-of-range codebook index was written";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
-    EXPECT_NE(std::string(e.what()).find("out of range at vertex 3"), std::string::npos) << e.what();
-  }
+  testing::expect_error([&] { w.write_page(bad); }, ErrorCode::invalid_argument, {"out of range at vertex 3"},
+                        "an out-of-range codebook index");
   EXPECT_EQ(w.bytes_written(), written);
   w.write_page(page1);
   w.finish();
