@@ -174,6 +174,21 @@ namespace {
 // GB/s against 11-12.5 with 64, from memory as from cache (100K vertices x 128 steps).
 constexpr std::uint64_t kResidualChunk = 64, kPredictiveChunk = 64;
 
+// A predictive chunk's stores go to as many rows as the window has steps, each a separate
+// stream, too many for the hardware prefetchers to follow: every row's first store of a chunk
+// missed, and the decode stalled on memory while it had work to do (a vector variant 1.3x faster
+// in cache ran no faster from memory). So each row's lines of the chunk two ahead are fetched
+// while this chunk writes the row: 19-22 % faster on 100K-vertex predictive windows (medians of
+// six alternated runs; one chunk ahead gained less). Residual windows add to rows the VQ pass has
+// just written, still cached: prefetching them cost 4-5 %.
+constexpr std::uint64_t kRowPrefetchChunks = 2;
+
+// The lines of `lanes` floats from `at` (a chunk's part of one row).
+PNB_LANES void prefetch_row(const float* at, std::uint64_t lanes) {
+  for (std::uint64_t q = 0; q < lanes; q += 64 / sizeof(float))
+    _mm_prefetch(reinterpret_cast<const char*>(at + q), _MM_HINT_T0);
+}
+
 // Each lane's values (zigzag integers) unpacked step-major, patched lanes' exceptions written
 // over their slots; then the prediction chain or the residual add runs on whole vectors.
 template <std::uint64_t kWidth>
@@ -423,6 +438,10 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
     for (std::uint64_t j = 0; j < lanes; j += kLanes) unpack_block(p, v0 + j, j, n - 1, c, special);
     __m256i k1[kChunkLanes / kLanes], k2[kChunkLanes / kLanes];
     float* row = window + v0;
+    // The chunk two ahead, while it lies in this range (only there is the rows' memory known).
+    const std::uint64_t ahead = kRowPrefetchChunks * kChunkLanes;
+    const bool prefetch = v0 + ahead + kChunkLanes <= e;
+    if (prefetch) prefetch_row(row + ahead, kChunkLanes);
     for (std::uint64_t j = 0; j < lanes; j += kLanes) {
       k1[j / kLanes] = k2[j / kLanes] = load(c.first + j);
       store(row + j, add_scaled(lo, k1[j / kLanes], step));
@@ -430,6 +449,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
     const std::uint32_t* z = c.z.data();
     for (std::uint32_t t = 1; t < n; ++t, z += kChunkLanes) {
       row += N;
+      if (prefetch) prefetch_row(row + ahead, kChunkLanes);
       for (std::uint64_t j = 0; j < lanes; j += kLanes) {
         __m256i& a = k1[j / kLanes];
         const __m256i next =
