@@ -47,6 +47,7 @@ program heat_fortran
            '"colors":[[0,0.2,0.3,0.9],[1,1,0.4,0.1]],"opacities":[[0,0],[1,8]]}}],' // &
            '"trigger":{"every_cycles":5}}'
   status = pnb_create(config // c_null_char, ctx)
+  deallocate(config)  ! the main program's allocatables are never freed by themselves
   if (status /= PNB_OK) then
     print *, 'pnb_create failed: ', pnb_last_error_message(c_null_ptr)
     stop 1
