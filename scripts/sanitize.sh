@@ -3,13 +3,16 @@
 # UndefinedBehaviorSanitizer and runs the whole test suite under them; any report fails the run.
 # Needs what scripts/setup.sh installs. BUILD_DIR defaults to build-sanitize.
 #
-# Two tests are run differently, for reasons of the tools rather than of the code:
+# Two tests are left out, for reasons of the tools rather than of the code (both run in the
+# normal suite):
 # - examples.using_cmake builds a program without the sanitizers against the installed
-#   (instrumented) libraries, which the ASan runtime refuses to start: left out here.
-# - ThreadPool.AForkedChildStillRunsOnSeveralThreads forks a process with threads; with leak
-#   detection on, a lock of the sanitizer's own allocator can be inherited held by the child,
-#   which then hangs in its first allocation (8 runs in 40). It runs on its own without leak
-#   detection (glibc's allocator, in the normal build, is fork-safe: 300 runs, no hang).
+#   (instrumented) libraries, which the ASan runtime refuses to start.
+# - ThreadPool.AForkedChildStillRunsOnSeveralThreads forks a process whose pool threads may be
+#   inside malloc or free at that moment. glibc's allocator takes its locks around fork(); the ASan
+#   allocator of this toolchain (GCC 12) does not (upstream ASan added pthread_atfork handlers at
+#   the end of 2023), so the child can inherit one of its locks held and hang in its first
+#   allocation: gdb shows it there, in 8 runs of 40 with leak detection and also without it. The
+#   normal build ran the test 300 times without a hang.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build-sanitize}
@@ -19,6 +22,5 @@ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined"
 cmake --build "$build"
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-fork_test=ThreadPool.AForkedChildStillRunsOnSeveralThreads
-ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" -E "examples.using_cmake|$fork_test"
-ASAN_OPTIONS=detect_leaks=0:halt_on_error=1 ctest --test-dir "$build" --output-on-failure -R "$fork_test"
+ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" \
+  -E "examples.using_cmake|ThreadPool.AForkedChildStillRunsOnSeveralThreads"
