@@ -1,9 +1,12 @@
 // tests/unit/compression/test_fields.h -- small synthetic time-varying fields, step-major.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
+
+#include "penumbra/compression/codec_params.h"
 
 namespace penumbra::compression::testing {
 
@@ -90,6 +93,52 @@ inline SyntheticField white_noise(std::uint64_t n, std::uint32_t steps, std::uin
   for (std::uint32_t t = 0; t < steps; ++t) f.times[t] = t;
   for (auto& x : f.values) x = g(rng);
   return f;
+}
+
+/// Outliers inside the field's range (so the bound and the codebooks keep their scale): a
+/// spike at one step makes a patched section (one exception), a vertex jumping between the
+/// extremes at every step makes a raw one under a tight bound (most of its values wider than
+/// the 15 bits a packed slot holds).
+inline void add_outliers(SyntheticField& f) {
+  const auto [lo, hi] = std::minmax_element(f.values.begin(), f.values.end());
+  const float low = *lo, high = *hi;
+  for (std::uint64_t v = 3; v < f.vertices; v += 11) f.values[(v % f.steps) * f.vertices + v] = v % 2 ? low : high;
+  for (std::uint64_t v = 7; v < f.vertices; v += 97)
+    for (std::uint32_t t = 0; t < f.steps; ++t) f.values[std::uint64_t(t) * f.vertices + v] = t % 2 ? low : high;
+}
+
+/// Four oscillating sources (periods of 8 to 13 steps) with a spatial fall-off: a few temporal
+/// shapes shared by many vertices, which VQ captures and a predictor does not.
+inline SyntheticField oscillating_sources(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
+  const double period[4] = {8, 9.5, 11, 13}, sx[4] = {0.2, 0.8, 0.5, 0.3}, sy[4] = {0.3, 0.7, 0.1, 0.9};
+  for (std::uint32_t t = 0; t < steps; ++t) {
+    f.times[t] = t;
+    for (std::uint64_t v = 0; v < n; ++v) {
+      double x, y, value = 0;
+      vertex_position(v, n, x, y);
+      for (int s = 0; s < 4; ++s) {
+        const double r2 = (x - sx[s]) * (x - sx[s]) + (y - sy[s]) * (y - sy[s]);
+        value += std::exp(-r2 / 0.05) * std::sin(2 * 3.14159265358979 * t / period[s] + s);
+      }
+      f.values[std::uint64_t(t) * n + v] = float(value);
+    }
+  }
+  return f;
+}
+
+/// Codebooks a few thousand vertices fill: plain VQ with 16 entries (no aligned codebook), and
+/// shift-aligned VQ with 32.
+inline CodecParams small_plain_codebooks() {
+  CodecParams p;
+  p.aligned = false;
+  p.codebook_size = 16;
+  return p;
+}
+inline CodecParams small_aligned_codebooks() {
+  CodecParams p;
+  p.codebook_size = 32;
+  return p;
 }
 
 }  // namespace penumbra::compression::testing

@@ -68,38 +68,6 @@ void expect_lanes_match_scalar(const std::shared_ptr<const EncodedPage>& page, c
         << what << ": cursor read " << i << " (step " << order[i] << ")";
 }
 
-// Outliers inside the field's range (so the bound and the codebooks keep their scale): a
-// spike at one step makes a patched section (one exception), a vertex jumping between the
-// extremes at every step makes a raw one under a tight bound (most of its values wider than
-// the 15 bits a packed slot holds).
-void add_outliers(SyntheticField& f) {
-  const auto [lo, hi] = std::minmax_element(f.values.begin(), f.values.end());
-  const float low = *lo, high = *hi;
-  for (std::uint64_t v = 3; v < f.vertices; v += 11) f.values[(v % f.steps) * f.vertices + v] = v % 2 ? low : high;
-  for (std::uint64_t v = 7; v < f.vertices; v += 97)
-    for (std::uint32_t t = 0; t < f.steps; ++t) f.values[std::uint64_t(t) * f.vertices + v] = t % 2 ? low : high;
-}
-
-// Four oscillating sources (periods of 8 to 13 steps) with a spatial fall-off: a few temporal
-// shapes shared by many vertices, which VQ captures and a predictor does not.
-SyntheticField oscillating_sources(std::uint64_t n, std::uint32_t steps) {
-  SyntheticField f{n, steps, std::vector<float>(n * steps), std::vector<double>(steps)};
-  const double period[4] = {8, 9.5, 11, 13}, sx[4] = {0.2, 0.8, 0.5, 0.3}, sy[4] = {0.3, 0.7, 0.1, 0.9};
-  for (std::uint32_t t = 0; t < steps; ++t) {
-    f.times[t] = t;
-    for (std::uint64_t v = 0; v < n; ++v) {
-      double x, y, value = 0;
-      testing::vertex_position(v, n, x, y);
-      for (int s = 0; s < 4; ++s) {
-        const double r2 = (x - sx[s]) * (x - sx[s]) + (y - sy[s]) * (y - sy[s]);
-        value += std::exp(-r2 / 0.05) * std::sin(2 * 3.14159265358979 * t / period[s] + s);
-      }
-      f.values[std::uint64_t(t) * n + v] = float(value);
-    }
-  }
-  return f;
-}
-
 std::shared_ptr<const EncodedPage> encode(const SyntheticField& f, std::uint32_t count, const CodecParams& p,
                                           float bound) {
   return std::make_shared<const EncodedPage>(
@@ -114,18 +82,15 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
   std::set<std::uint32_t> residual_codes, predictive_codes;
 
   auto noise = testing::white_noise(N, 37);
-  add_outliers(noise);
-  CodecParams plain;
-  plain.aligned = false;
-  plain.codebook_size = 16;
+  testing::add_outliers(noise);
+  const CodecParams plain = testing::small_plain_codebooks();
   auto blobs = testing::smooth_blobs(N, 40);
-  add_outliers(blobs);
-  auto waves = oscillating_sources(N, 64);
+  testing::add_outliers(blobs);
+  auto waves = testing::oscillating_sources(N, 64);
   auto waves_outliers = waves;
-  add_outliers(waves_outliers);
+  testing::add_outliers(waves_outliers);
   const auto front = testing::relaxing_front(N, 64);
-  CodecParams aligned;
-  aligned.codebook_size = 32;
+  const CodecParams aligned = testing::small_aligned_codebooks();
 
   struct Case {
     const char* what;
@@ -168,13 +133,9 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   // The codebook lookups (gathers) of pages without bit blocks.
   VectorDecodeGuard guard;
   constexpr std::uint64_t N = 3003;
-  const auto waves = oscillating_sources(N, 64);
+  const auto waves = testing::oscillating_sources(N, 64);
   const auto front = testing::relaxing_front(N, 64);
-  CodecParams plain;
-  plain.aligned = false;
-  plain.codebook_size = 16;
-  CodecParams aligned;
-  aligned.codebook_size = 32;
+  const CodecParams plain = testing::small_plain_codebooks(), aligned = testing::small_aligned_codebooks();
   const auto vq = encode(waves, 64, plain, 0.0f);
   const auto shifted = encode(front, 64, aligned, 0.0f);
   const auto partial = encode(waves, 29, plain, 0.0f);
@@ -188,7 +149,7 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   // eight values ends at a row's last one for a shift of 0.
   CodecParams plain128 = plain;
   plain128.window = 128;
-  const auto long_waves = oscillating_sources(N, 128);
+  const auto long_waves = testing::oscillating_sources(N, 128);
   expect_lanes_match_scalar(encode(long_waves, 128, plain128, 0.0f), "plain VQ, W = 128");
   expect_lanes_match_scalar(encode(long_waves, 101, plain128, 0.0f), "plain VQ, W = 128, 101 steps");
   CodecParams aligned8 = aligned;

@@ -1,0 +1,97 @@
+// tests/unit/compression/page_mutation_test.cpp -- validate_page's contract under random damage:
+// a page it accepts decodes without error and reads only its own arrays. The normal build sees
+// a crash or an exception; the sanitizer build (scripts/sanitize.sh) also sees every read
+// outside an array, which is what an index or offset past what the page holds would cause.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <string>
+
+#include "penumbra/compression/window_codec.h"
+#include "penumbra/core/error.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+std::vector<std::shared_ptr<const EncodedPage>> pages_of_every_method() {
+  // 3003 vertices: lane blocks, a scalar tail and several chunks per decode.
+  constexpr std::uint64_t N = 3003;
+  auto noise = testing::white_noise(N, 37);
+  testing::add_outliers(noise);
+  auto waves = testing::oscillating_sources(N, 64);
+  testing::add_outliers(waves);
+  const auto front = testing::relaxing_front(N, 64);
+  const CodecParams plain = testing::small_plain_codebooks(), aligned = testing::small_aligned_codebooks();
+  auto encode = [](const testing::SyntheticField& f, std::uint32_t steps, const CodecParams& p, float bound) {
+    return std::make_shared<const EncodedPage>(encode_window(f.values.data(), f.vertices, steps, f.times.data(), 0, p, bound));
+  };
+  return {encode(noise, 37, CodecParams{}, 2e-2f * noise.range()),   // predictive, raw sections
+          encode(waves, 64, plain, 0),                              // vq
+          encode(waves, 64, plain, 1e-2f * waves.range()),          // vq_residual
+          encode(waves, 29, plain, 2e-4f * waves.range()),          // partial window, tight bound
+          encode(front, 64, aligned, 0),                            // vq_aligned
+          encode(front, 64, aligned, 1e-2f * front.range())};       // vq_aligned_residual
+}
+
+// One random change to what a page's decoders read: an index, a shift, a 4-bit code, a bit of
+// the payload, a section's or a group's start, a width, a scale, the codebook size, the payload's
+// length or a time.
+void damage(EncodedPage& p, std::mt19937_64& rng) {
+  auto any = [&](std::size_t size) { return static_cast<std::size_t>(rng() % size); };
+  auto scramble = [&](std::vector<std::uint8_t>& v) {
+    if (!v.empty()) v[any(v.size())] = static_cast<std::uint8_t>(rng());
+  };
+  BitBlocks& b = p.blocks;
+  switch (rng() % 13) {
+    case 0: scramble(p.i8); break;
+    case 1: scramble(p.iw); break;
+    case 2: scramble(p.ia); break;
+    case 3: scramble(p.shift); break;
+    case 4: if (!b.widths.empty()) b.widths[any(b.widths.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8)); break;
+    case 5: if (!b.payload.empty()) b.payload[any(b.payload.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8)); break;
+    case 6: if (!b.section_bits.empty()) b.section_bits[any(b.section_bits.size())] += static_cast<std::uint32_t>(rng() % 64) - 32; break;
+    case 7: if (!b.group_offsets.empty()) b.group_offsets[any(b.group_offsets.size())] += (rng() % 16) - 8; break;
+    case 8: p.first_width = static_cast<std::uint32_t>(rng() % 40); break;
+    case 9: if (!p.mean_q.empty()) p.mean_q[any(p.mean_q.size())] = static_cast<std::uint16_t>(rng()); break;
+    case 10: p.codebook_size = static_cast<std::uint32_t>(rng() % 300); break;
+    case 11: if (b.payload.size() > 16) b.payload.resize(b.payload.size() - 1 - any(8)); break;
+    default: if (!p.times.empty()) p.times[any(p.times.size())] = rng() % 2 ? std::nan("") : -1.0; break;
+  }
+}
+
+TEST(PageMutation, WhatValidatePageAcceptsDecodesWithinThePage) {
+  const auto originals = pages_of_every_method();
+  std::mt19937_64 rng(20261201);
+  int accepted = 0, rejected = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const EncodedPage& original = *originals[static_cast<std::size_t>(trial) % originals.size()];
+    auto page = std::make_shared<EncodedPage>(original);
+    for (int k = 1 + static_cast<int>(rng() % 3); k > 0; --k) damage(*page, rng);
+    try {
+      validate_page(*page);
+    } catch (const Error&) {
+      ++rejected;
+      continue;
+    }  // anything else (a bad_alloc, a length_error) fails the test
+    ++accepted;
+    const std::string what = std::string("trial ") + std::to_string(trial) + ", " + to_string(page->method);
+    const std::uint64_t N = page->vertex_count;
+    const std::uint32_t n = page->step_count;
+    std::vector<float> window(N * n), step(N), series(n);
+    EXPECT_NO_THROW(decode_window(*page, window.data())) << what;
+    for (std::uint32_t t = 0; t < n; ++t) EXPECT_NO_THROW(decode_step(*page, t, step.data())) << what;
+    StepCursor cursor;
+    for (std::uint32_t t : {0u, 1u, 2u, n / 2, n - 1}) EXPECT_NO_THROW(cursor.decode(page, t, step.data())) << what;
+    for (std::uint64_t v = 0; v < N; v += 97) EXPECT_NO_THROW(decode_vertex(*page, v, series.data())) << what;
+  }
+  // Both outcomes are reached often: the damage is neither always caught nor always harmless.
+  EXPECT_GT(accepted, 50);
+  EXPECT_GT(rejected, 50);
+  std::printf("%d damaged pages accepted, %d rejected\n", accepted, rejected);
+}
+
+}  // namespace
+}  // namespace penumbra::compression
