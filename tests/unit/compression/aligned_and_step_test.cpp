@@ -36,12 +36,6 @@ double max_abs_error(const float* ref, const float* got, std::size_t count) {
   return m;
 }
 
-EncodedPage encode(const SyntheticField& f, std::uint32_t first, std::uint32_t count, const CodecParams& p,
-                   float bound = 0) {
-  return encode_window(f.values.data() + std::uint64_t(first) * f.vertices, f.vertices, count, f.times.data() + first,
-                       first, p, bound);
-}
-
 // Step, window and vertex decodes of a page agree bit for bit.
 void expect_decodes_agree(const EncodedPage& page) {
   const std::uint64_t N = page.vertex_count;

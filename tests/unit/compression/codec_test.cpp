@@ -31,12 +31,6 @@ Errors compare(const float* ref, const float* got, std::size_t count, double ran
   return {mx, mse > 0 ? 10 * std::log10(range * range / mse) : 400.0};
 }
 
-EncodedPage encode(const SyntheticField& f, std::uint32_t first, std::uint32_t count, const CodecParams& p,
-                   float bound = 0, WarmStart* warm = nullptr) {
-  return encode_window(f.values.data() + std::uint64_t(first) * f.vertices, f.vertices, count, f.times.data() + first,
-                       first, p, bound, warm);
-}
-
 TEST(Lbg, RecoversWellSeparatedClustersAndIsDeterministic) {
   // 8 clusters in 4-D, tight around known centres: an 8-entry codebook must find them all.
   std::vector<float> centres(8 * 4), data;

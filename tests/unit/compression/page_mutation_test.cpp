@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <set>
 #include <string>
 
 #include "penumbra/compression/window_codec.h"
@@ -25,15 +26,13 @@ std::vector<std::shared_ptr<const EncodedPage>> pages_of_every_method() {
   testing::add_outliers(waves);
   const auto front = testing::relaxing_front(N, 64);
   const CodecParams plain = testing::small_plain_codebooks(), aligned = testing::small_aligned_codebooks();
-  auto encode = [](const testing::SyntheticField& f, std::uint32_t steps, const CodecParams& p, float bound) {
-    return std::make_shared<const EncodedPage>(encode_window(f.values.data(), f.vertices, steps, f.times.data(), 0, p, bound));
-  };
-  return {encode(noise, 37, CodecParams{}, 2e-2f * noise.range()),   // predictive, raw sections
-          encode(waves, 64, plain, 0),                              // vq
-          encode(waves, 64, plain, 1e-2f * waves.range()),          // vq_residual
-          encode(waves, 29, plain, 2e-4f * waves.range()),          // partial window, tight bound
-          encode(front, 64, aligned, 0),                            // vq_aligned
-          encode(front, 64, aligned, 1e-2f * front.range())};       // vq_aligned_residual
+  using testing::shared_page;
+  return {shared_page(noise, 37, CodecParams{}, 2e-2f * noise.range()),   // predictive, raw sections
+          shared_page(waves, 64, plain, 0),                              // vq
+          shared_page(waves, 64, plain, 1e-2f * waves.range()),          // vq_residual
+          shared_page(waves, 29, plain, 2e-4f * waves.range()),          // partial window, tight bound
+          shared_page(front, 64, aligned, 0),                            // vq_aligned
+          shared_page(front, 64, aligned, 1e-2f * front.range())};       // vq_aligned_residual
 }
 
 // One random change to what a page's decoders read: an index, a shift, a 4-bit code, a bit of
@@ -44,15 +43,21 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
   auto scramble = [&](std::vector<std::uint8_t>& v) {
     if (!v.empty()) v[any(v.size())] = static_cast<std::uint8_t>(rng());
   };
+  auto flip_a_bit = [&](std::vector<std::uint8_t>& v) {
+    if (!v.empty()) v[any(v.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+  };
   BitBlocks& b = p.blocks;
   switch (rng() % 13) {
     case 0: scramble(p.i8); break;
     case 1: scramble(p.iw); break;
     case 2: scramble(p.ia); break;
     case 3: scramble(p.shift); break;
-    case 4: if (!b.widths.empty()) b.widths[any(b.widths.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8)); break;
-    case 5: if (!b.payload.empty()) b.payload[any(b.payload.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8)); break;
-    case 6: if (!b.section_bits.empty()) b.section_bits[any(b.section_bits.size())] += static_cast<std::uint32_t>(rng() % 64) - 32; break;
+    case 4: flip_a_bit(b.widths); break;
+    case 5: flip_a_bit(b.payload); break;
+    case 6:
+      if (!b.section_bits.empty())
+        b.section_bits[any(b.section_bits.size())] += static_cast<std::uint32_t>(rng() % 64) - 32;
+      break;
     case 7: if (!b.group_offsets.empty()) b.group_offsets[any(b.group_offsets.size())] += (rng() % 16) - 8; break;
     case 8: p.first_width = static_cast<std::uint32_t>(rng() % 40); break;
     case 9: if (!p.mean_q.empty()) p.mean_q[any(p.mean_q.size())] = static_cast<std::uint16_t>(rng()); break;
@@ -64,6 +69,9 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
 
 TEST(PageMutation, WhatValidatePageAcceptsDecodesWithinThePage) {
   const auto originals = pages_of_every_method();
+  std::set<PageMethod> methods;
+  for (const auto& page : originals) methods.insert(page->method);
+  ASSERT_EQ(methods.size(), 5u) << "the pages no longer cover every method";
   std::mt19937_64 rng(20261201);
   int accepted = 0, rejected = 0;
   for (int trial = 0; trial < 400; ++trial) {

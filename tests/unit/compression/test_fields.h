@@ -1,12 +1,15 @@
-// tests/unit/compression/test_fields.h -- small synthetic time-varying fields, step-major.
+// tests/unit/compression/test_fields.h -- small synthetic time-varying fields, step-major, and the
+// pages encoded from them.
 #pragma once
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include "penumbra/compression/codec_params.h"
+#include "penumbra/compression/window_codec.h"
 
 namespace penumbra::compression::testing {
 
@@ -139,6 +142,19 @@ inline CodecParams small_aligned_codebooks() {
   CodecParams p;
   p.codebook_size = 32;
   return p;
+}
+
+/// encode_window over steps [first, first + count) of f.
+inline EncodedPage encode(const SyntheticField& f, std::uint32_t first, std::uint32_t count, const CodecParams& p,
+                          float bound = 0, WarmStart* warm = nullptr) {
+  return encode_window(f.values.data() + std::uint64_t(first) * f.vertices, f.vertices, count, f.times.data() + first,
+                       first, p, bound, warm);
+}
+
+/// The first `count` steps of f as a page that cursors can hold.
+inline std::shared_ptr<const EncodedPage> shared_page(const SyntheticField& f, std::uint32_t count,
+                                                      const CodecParams& p, float bound) {
+  return std::make_shared<const EncodedPage>(encode(f, 0, count, p, bound));
 }
 
 }  // namespace penumbra::compression::testing

@@ -68,12 +68,6 @@ void expect_lanes_match_scalar(const std::shared_ptr<const EncodedPage>& page, c
         << what << ": cursor read " << i << " (step " << order[i] << ")";
 }
 
-std::shared_ptr<const EncodedPage> encode(const SyntheticField& f, std::uint32_t count, const CodecParams& p,
-                                          float bound) {
-  return std::make_shared<const EncodedPage>(
-      encode_window(f.values.data(), f.vertices, count, f.times.data(), 0, p, bound));
-}
-
 TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
   VectorDecodeGuard guard;
   // 3003 vertices: 375 lane blocks and a tail of 3 for the scalar path.
@@ -112,7 +106,7 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
       {"front, aligned residual", &front, 64, aligned, 1e-2f * front.range()},
   };
   for (const Case& c : cases) {
-    const auto page = encode(*c.field, c.steps, c.params, c.bound);
+    const auto page = testing::shared_page(*c.field, c.steps, c.params, c.bound);
     methods.insert(page->method);
     auto& codes = page->method == PageMethod::predictive ? predictive_codes : residual_codes;
     for (std::uint64_t v = 0; v < N; ++v) codes.insert(page->blocks.width(v));
@@ -136,9 +130,9 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   const auto waves = testing::oscillating_sources(N, 64);
   const auto front = testing::relaxing_front(N, 64);
   const CodecParams plain = testing::small_plain_codebooks(), aligned = testing::small_aligned_codebooks();
-  const auto vq = encode(waves, 64, plain, 0.0f);
-  const auto shifted = encode(front, 64, aligned, 0.0f);
-  const auto partial = encode(waves, 29, plain, 0.0f);
+  const auto vq = testing::shared_page(waves, 64, plain, 0.0f);
+  const auto shifted = testing::shared_page(front, 64, aligned, 0.0f);
+  const auto partial = testing::shared_page(waves, 29, plain, 0.0f);
   ASSERT_EQ(vq->method, PageMethod::vq);
   ASSERT_EQ(shifted->method, PageMethod::vq_aligned);
   expect_lanes_match_scalar(vq, "plain VQ");
@@ -150,13 +144,13 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   CodecParams plain128 = plain;
   plain128.window = 128;
   const auto long_waves = testing::oscillating_sources(N, 128);
-  expect_lanes_match_scalar(encode(long_waves, 128, plain128, 0.0f), "plain VQ, W = 128");
-  expect_lanes_match_scalar(encode(long_waves, 101, plain128, 0.0f), "plain VQ, W = 128, 101 steps");
+  expect_lanes_match_scalar(testing::shared_page(long_waves, 128, plain128, 0.0f), "plain VQ, W = 128");
+  expect_lanes_match_scalar(testing::shared_page(long_waves, 101, plain128, 0.0f), "plain VQ, W = 128, 101 steps");
   CodecParams aligned8 = aligned;
   aligned8.window = 8;
-  expect_lanes_match_scalar(encode(testing::relaxing_front(N, 8), 8, aligned8, 0.0f), "W = 8, 8 steps");
-  expect_lanes_match_scalar(encode(testing::relaxing_front(N, 5), 5, aligned8, 0.0f), "W = 8, 5 steps");
-  const auto partial_front = encode(testing::relaxing_front(N, 45), 45, aligned, 0.0f);
+  expect_lanes_match_scalar(testing::shared_page(testing::relaxing_front(N, 8), 8, aligned8, 0.0f), "W = 8, 8 steps");
+  expect_lanes_match_scalar(testing::shared_page(testing::relaxing_front(N, 5), 5, aligned8, 0.0f), "W = 8, 5 steps");
+  const auto partial_front = testing::shared_page(testing::relaxing_front(N, 45), 45, aligned, 0.0f);
   ASSERT_EQ(partial_front->method, PageMethod::vq_aligned);
   expect_lanes_match_scalar(partial_front, "aligned VQ, 45 of 64 steps");
 }
