@@ -482,8 +482,8 @@ __attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, s
     __m256i values = section;
     __m256i predictor = zero;
     if (predictive) {
-      __m256i first;
-      predictive_heads(group, section, p.first_width, predictor, first);
+      // The predictor bit only: the cursor's first step reads k_0 itself.
+      predictor = read_lanes(group, section, _mm256_set1_epi32(1));
       values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.first_width)));
     }
     const LaneValues lv = lane_values(group, values, codes, pb);
