@@ -1,5 +1,6 @@
 // compression/src/bit_io.h -- LSB-first bit packing for BitBlocks payloads (private).
 #pragma once
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -54,11 +55,7 @@ inline std::uint32_t read_bits_branchless(const std::uint8_t* data, std::uint64_
 inline std::uint32_t zigzag(std::int32_t v) { return (std::uint32_t(v) << 1) ^ std::uint32_t(v >> 31); }
 inline std::int32_t unzigzag(std::uint32_t u) { return std::int32_t(u >> 1) ^ -std::int32_t(u & 1); }
 
-inline unsigned bit_width(std::uint32_t v) {
-  unsigned w = 0;
-  while (v) ++w, v >>= 1;
-  return w;
-}
+inline unsigned bit_width(std::uint32_t v) { return static_cast<unsigned>(std::bit_width(v)); }
 
 inline std::uint32_t float_bits(float f) {
   std::uint32_t u;
