@@ -333,20 +333,13 @@ void decode_window(const EncodedPage& p, float* out) {
   detail::require_decodable(p, "decode_window");
   require(out != nullptr, "decode_window: null output");
   const std::uint64_t N = p.vertex_count;
-  // Chunks of whole groups: each writes its vertex range of every step row. A page with bit
-  // sections and fewer vertices than a chunk per thread is shared out in whole groups all the
-  // same: mug's predictive page (3774 vertices x 21 steps, about 40 us) decoded at 7.4 GB/s on
-  // one thread and 12.0 on two (three alternated runs of a scratch harness). The threads take
-  // chunks from a shared count, so a worker that wakes late finds nothing left and costs the
-  // caller only the wake-up. A VQ page decodes about five times faster, and there the hand-off
-  // cost more than it saved (mug: 39 -> 30 GB/s), so it stays whole.
+  // Chunks of whole groups: each writes its vertex range of every step row. A page smaller than
+  // a chunk stays whole. Split between the threads, mug's predictive page (3774 vertices x 21
+  // steps, about 35 us) decoded up to twice as fast with the other worker awake, but with another
+  // process busy on the other core some runs took four times as long (2.2 against 8.8 GB/s): a
+  // descheduled worker holding a chunk keeps the caller waiting about 100 us.
   constexpr std::uint64_t kChunk = kGroup * 64;
-  const std::uint64_t per_thread = (N + worker_count() - 1) / worker_count();
-  const std::uint64_t chunk =
-      detail::has_bit_blocks(p.method)
-          ? std::min(kChunk, std::max<std::uint64_t>(kGroup, (per_thread + kGroup - 1) / kGroup * kGroup))
-          : kChunk;
-  parallel_for(N, chunk, [&](std::size_t b, std::size_t e) {
+  parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     const std::uint64_t run = has_residual(p) ? kResidualRun : e - b;
     for (std::uint64_t s = b; s < e; s += run) window_range(p, s, std::min<std::uint64_t>(e, s + run), out);
   });
