@@ -72,15 +72,22 @@ PNB_LANES void list_lanes(int mask, std::uint64_t v, std::vector<std::uint64_t>&
   for (int m = mask; m; m &= m - 1) out.push_back(v + std::uint64_t(__builtin_ctz(unsigned(m))));
 }
 
-// `width` bits at bit offset `bit` from `group`, per lane: 4 bytes hold any plain value (<= 13
-// bits after a shift of <= 7); the payload's 8 bytes of padding cover the last one. Eight scalar
-// loads, not a 4-byte gather (as load_words): one-step decodes of bit sections ran 11-20 % faster
-// without it (mug and eeg, three alternated runs), eeg's residual windows 16 %.
-PNB_LANES __m256i read_lanes(const std::uint8_t* group, __m256i bit, __m256i width) {
+// The sizeof(Word) bytes from `group + byte[l]` of each lane l. Eight scalar loads, not a gather:
+// gathers are slow on an AMD Zen 5, and without them one-step decodes of bit sections ran 11-20 %
+// faster (mug and eeg, three alternated runs), eeg's predictive windows 12 % and its residual
+// ones 4-16 % (100K vertices, medians of four alternated runs); mug's windows within 4 %.
+template <class Word>
+PNB_LANES void lane_words(const std::uint8_t* group, __m256i byte, Word (&word)[kLanes]) {
   alignas(32) std::uint32_t at[kLanes];
-  store(at, _mm256_srli_epi32(bit, 3));
+  store(at, byte);
+  for (std::uint64_t l = 0; l < kLanes; ++l) std::memcpy(&word[l], group + at[l], sizeof(Word));
+}
+
+// `width` bits at bit offset `bit` from `group`, per lane: 4 bytes hold any plain value (<= 13
+// bits after a shift of <= 7); the payload's 8 bytes of padding cover the last one.
+PNB_LANES __m256i read_lanes(const std::uint8_t* group, __m256i bit, __m256i width) {
   int bytes[kLanes];
-  for (std::uint64_t l = 0; l < kLanes; ++l) std::memcpy(&bytes[l], group + at[l], 4);
+  lane_words(group, _mm256_srli_epi32(bit, 3), bytes);
   const __m256i word = _mm256_setr_epi32(bytes[0], bytes[1], bytes[2], bytes[3], bytes[4], bytes[5], bytes[6], bytes[7]);
   const __m256i mask = _mm256_sub_epi32(_mm256_sllv_epi32(_mm256_set1_epi32(1), width), _mm256_set1_epi32(1));
   return _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(bit, _mm256_set1_epi32(7))), mask);
@@ -206,14 +213,10 @@ struct WindowChunk {
 };
 
 // The 8 bytes from `group + byte[l]` of each lane l, as 64-bit lanes: lanes 0, 2, 4, 6 in `even`
-// and 1, 3, 5, 7 in `odd`. Eight scalar loads, not two 64-bit gathers, which were slower on an
-// AMD Zen 5: without them eeg's predictive windows decode 12 % faster and its residual ones
-// 4-10 % (100K vertices, medians of four alternated runs); mug's small pages within 2 %.
+// and 1, 3, 5, 7 in `odd`.
 PNB_LANES void load_words(const std::uint8_t* group, __m256i byte, __m256i& even, __m256i& odd) {
-  alignas(32) std::uint32_t at[kLanes];
-  store(at, byte);
   long long word[kLanes];
-  for (std::uint64_t l = 0; l < kLanes; ++l) std::memcpy(&word[l], group + at[l], 8);
+  lane_words(group, byte, word);
   even = _mm256_setr_epi64x(word[0], word[2], word[4], word[6]);
   odd = _mm256_setr_epi64x(word[1], word[3], word[5], word[7]);
 }

@@ -18,7 +18,7 @@ namespace penumbra::compression {
 namespace {
 
 std::vector<std::shared_ptr<const EncodedPage>> pages_of_every_method() {
-  // 3003 vertices: lane blocks, a scalar tail and several chunks per decode.
+  // 3003 vertices: lane blocks, a scalar tail and several 512-vertex runs of a residual decode.
   constexpr std::uint64_t N = 3003;
   auto noise = testing::white_noise(N, 37);
   testing::add_outliers(noise);
