@@ -25,4 +25,16 @@ PNB_LANES void store(float* at, __m256 x) { _mm256_storeu_ps(at, x); }
 PNB_LANES void store(std::int32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
 PNB_LANES void store(std::uint32_t* at, __m256i x) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), x); }
 
+/// The signed integers of 8 zigzag codes.
+PNB_LANES __m256i unzigzag_lanes(__m256i z) {
+  return _mm256_xor_si256(_mm256_srli_epi32(z, 1),
+                          _mm256_sub_epi32(_mm256_setzero_si256(), _mm256_and_si256(z, _mm256_set1_epi32(1))));
+}
+
+/// base + q * step with the scalar decoders' float operations: convert, multiply, add; never
+/// fused (the lane functions' target has no FMA, and the module compiles with -ffp-contract=off).
+PNB_LANES __m256 add_scaled(__m256 base, __m256i q, __m256 step) {
+  return _mm256_add_ps(base, _mm256_mul_ps(_mm256_cvtepi32_ps(q), step));
+}
+
 }  // namespace penumbra::compression::detail

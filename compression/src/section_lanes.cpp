@@ -93,18 +93,6 @@ PNB_LANES __m256i read_lanes(const std::uint8_t* group, __m256i bit, __m256i wid
   return _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(bit, _mm256_set1_epi32(7))), mask);
 }
 
-PNB_LANES __m256i unzigzag_lanes(__m256i z) {
-  return _mm256_xor_si256(_mm256_srli_epi32(z, 1),
-                          _mm256_sub_epi32(_mm256_setzero_si256(), _mm256_and_si256(z, _mm256_set1_epi32(1))));
-}
-
-// Same float operations as the scalar decoders: convert, multiply, add; never fused (this
-// file's target has no FMA, and the module compiles with -ffp-contract=off).
-PNB_LANES __m256 add_scaled(__m256 base, __m256i q, __m256 step) {
-  return _mm256_add_ps(base, _mm256_mul_ps(_mm256_cvtepi32_ps(q), step));
-}
-
-
 // The prediction of k_t (predictive_layout.h) for lanes whose predictor bit is set in `linear`.
 PNB_LANES __m256i predict_lanes(__m256i linear, std::uint32_t t, __m256i k1, __m256i k2) {
   if (t < 2) return k1;
@@ -179,12 +167,13 @@ namespace {
 // A whole-window decode runs a chunk of vertices in lockstep, step by step, so that each step's
 // row gets a contiguous run: with one lane block per pass, the rows took 32 bytes each, more
 // concurrent write streams than the caches prefetch, and the decode ran at a third of memcpy
-// when its output was not already cached. Measured best: 64 vertices (256 bytes per row), for
-// residual and predictive pages alike. Predictive pages had taken 1024 (4 KB rows) on a machine
-// with 4-byte gathers per value; with the lanes' slots unpacked from 8-byte buffers, 1024 lanes
-// of unpacked values (half a megabyte for 128 steps) no longer fit the caches and ran at 4.5-5
-// GB/s against 11-12.5 with 64, from memory as from cache (100K vertices x 128 steps).
-constexpr std::uint64_t kResidualChunk = 64, kPredictiveChunk = 64;
+// when its output was not already cached. Measured best for predictive pages: 64 vertices (256
+// bytes per row). They had taken 1024 (4 KB rows) on a machine with 4-byte gathers per value;
+// with the lanes' slots unpacked from 8-byte buffers, 1024 lanes of unpacked values (half a
+// megabyte for 128 steps) no longer fit the caches and ran at 4.5-5 GB/s against 11-12.5 with
+// 64, from memory as from cache (100K vertices x 128 steps). Residual chunks: kResidualChunk
+// (section_lanes.h).
+constexpr std::uint64_t kPredictiveChunk = 64;
 
 // A predictive chunk's stores go to as many rows as the window has steps, each a separate
 // stream, too many for the hardware prefetchers to follow: every row's first store of a chunk
@@ -203,12 +192,12 @@ PNB_LANES void prefetch_row(const float* at, std::uint64_t lanes) {
 
 // Each lane's values (zigzag integers) unpacked step-major, patched lanes' exceptions written
 // over their slots; then the prediction chain or the residual add runs on whole vectors.
-template <std::uint64_t kWidth>
+template <std::uint64_t kWidth, std::uint64_t kStride = kWidth>
 struct WindowChunk {
-  static constexpr std::uint64_t kLanesPerChunk = kWidth;
+  static constexpr std::uint64_t kLanesPerChunk = kStride;
   alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
-  /// Value i of lane j at z[i * kWidth + j]. Thread-local and kept for the life of the worker
-  /// threads: at most 256 KiB (64 lanes, 1024 steps).
+  /// Value i of lane j at z[i * kStride + j]. Thread-local and kept for the life of the worker
+  /// threads: 135 KiB for a residual chunk of 64 steps, at most 2.1 MiB (1024 steps).
   std::vector<std::uint32_t> z;
 };
 
@@ -327,9 +316,9 @@ void patch_lane(const std::uint8_t* data, std::uint64_t at, std::uint32_t except
 // thread_local is a call to __tls_get_addr, and GCC recomputes it at every use of the variable,
 // even through a reference bound once, rather than keep it in a register (14 % of a predictive
 // decode's instructions). A reference returned by a call it cannot see into is kept.
-template <std::uint64_t kWidth>
-[[gnu::noinline]] WindowChunk<kWidth>& thread_chunk() {
-  thread_local WindowChunk<kWidth> chunk;
+template <std::uint64_t kWidth, std::uint64_t kStride = kWidth>
+[[gnu::noinline]] WindowChunk<kWidth, kStride>& thread_chunk() {
+  thread_local WindowChunk<kWidth, kStride> chunk;
   return chunk;
 }
 
@@ -411,29 +400,39 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
 
 }  // namespace
 
+__attribute__((target("avx2"))) ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0,
+                                                                    std::uint64_t lanes,
+                                                                    std::vector<std::uint64_t>& special) {
+  const std::uint32_t n = p.step_count;
+  WindowChunk<kResidualChunk, kResidualStride>& c = thread_chunk<kResidualChunk, kResidualStride>();
+  c.z.resize(std::size_t(n) * kResidualStride);
+  for (std::uint64_t j = 0; j < lanes; j += kLanes) {
+    if (packed_codes(p, v0 + j) != 0)
+      unpack_block(p, v0 + j, j, n, c, special);
+    else  // sparse residuals: an all-zero block adds nothing and is not unpacked
+      store(c.adds + j, _mm256_setzero_si256());
+  }
+  return {c.z.data(), c.adds, p.step};
+}
+
 __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
                                                            float* window, std::vector<std::uint64_t>& special) {
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
   const __m256 step = _mm256_set1_ps(p.step);
-  constexpr std::uint64_t kChunkLanes = kResidualChunk;
-  WindowChunk<kChunkLanes>& c = thread_chunk<kChunkLanes>();
-  c.z.resize(std::size_t(n) * kChunkLanes);
-  for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
-    const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
-    std::uint64_t active[kChunkLanes / kLanes], count = 0;
+  for (std::uint64_t v0 = b; v0 < e; v0 += kResidualChunk) {
+    const std::uint64_t lanes = std::min(kResidualChunk, e - v0);
+    const ResidualLanes r = unpack_residual_lanes(p, v0, lanes, special);
+    std::uint64_t active[kResidualChunk / kLanes], count = 0;
     for (std::uint64_t j = 0; j < lanes; j += kLanes)
-      if (packed_codes(p, v0 + j) != 0) {  // sparse residuals: all-zero blocks add nothing
-        unpack_block(p, v0 + j, j, n, c, special);
-        active[count++] = j;
-      }
+      if (packed_codes(p, v0 + j) != 0) active[count++] = j;
     float* row = window + v0;
-    const std::uint32_t* z = c.z.data();
-    for (std::uint32_t t = 0; t < n; ++t, row += N, z += kChunkLanes)
+    const std::uint32_t* z = r.z;
+    for (std::uint32_t t = 0; t < n; ++t, row += N, z += kResidualStride)
       for (std::uint64_t a = 0; a < count; ++a) {
         const std::uint64_t j = active[a];
         const __m256 base = load(row + j);
-        const __m256 adds = _mm256_castsi256_ps(load(c.adds + j));
+        const __m256 adds = _mm256_castsi256_ps(load(r.adds + j));
         store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load(z + j)), step), adds));
       }
   }

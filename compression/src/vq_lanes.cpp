@@ -69,11 +69,12 @@ __attribute__((target("avx2"))) void add_rows8_lanes(const float* table, const s
   }
 }
 
+template <bool kWithResidual>
 __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, const std::uint16_t* mean_q,
                                                      const float* c8, const std::uint8_t* i8, const float* cw,
                                                      std::uint32_t window, const std::uint8_t* iw,
                                                      std::uint64_t count, float* out, std::uint64_t stride,
-                                                     std::uint32_t steps) {
+                                                     std::uint32_t steps, const ResidualLanes* residual) {
   // Vertices in runs of kRun: first mean + D8 of every block of steps for the run (each vertex's
   // D8 row is one read of 8 floats, transposed), then the steps eight at a time, each writing
   // eight step rows of the run. Going through all steps of 8 vertices at once instead touched
@@ -103,7 +104,20 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
         __m256 c[8];
         rows_transposed(cw + t, roww + j, c);
         const __m256 bj = _mm256_load_ps(b + j);
-        for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
+        // Lanes without a residual keep the VQ value as it is (code 0 keeps -0.0f, as in the
+        // scalar decoders); blocks without one (most, on sparse residuals) store it directly.
+        const __m256 adds = kWithResidual ? _mm256_castsi256_ps(load(residual->adds + r0 + j)) : _mm256_setzero_ps();
+        if (kWithResidual && _mm256_movemask_ps(adds)) {
+          const __m256 step = _mm256_set1_ps(residual->step);
+          const std::uint32_t* z = residual->z + std::uint64_t(t) * kResidualStride + r0 + j;
+          for (std::uint32_t k = 0; k < k_end; ++k, z += kResidualStride) {
+            const __m256 value = _mm256_add_ps(bj, c[k]);
+            store(at + std::uint64_t(k) * stride + j,
+                  _mm256_blendv_ps(value, add_scaled(value, unzigzag_lanes(load(z)), step), adds));
+          }
+        } else {
+          for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
+        }
       }
     }
   }
@@ -174,11 +188,16 @@ void add_offsets(const float* table, const std::int32_t* offset, const float* le
 
 bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
                const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
-               std::uint64_t stride, std::uint32_t steps) {
+               std::uint64_t stride, std::uint32_t steps, const ResidualLanes* residual) {
   // Eight steps of a row must share one block of D8 (window a multiple of 64).
   if (window % 64 != 0 || count < kLanes || !lanes_active()) return false;
   const std::uint64_t i = lane_part(count);
-  vq_window_lanes(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps);
+  if (residual) {
+    if (i != count || count > kResidualChunk) return false;
+    vq_window_lanes<true>(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps, residual);
+    return true;
+  }
+  vq_window_lanes<false>(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps, nullptr);
   const std::uint32_t block = window / 8;
   for (std::uint64_t v = i; v < count; ++v) {
     const float mean = dequantise_mean(lo, scale, mean_q[v]);

@@ -26,15 +26,22 @@ void add_rows8(const float* table, const std::int32_t* row, const float* base, s
 /// out[i] = level[i] + table[offset[i]] (an aligned page's full-window decode).
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out);
 
+struct ResidualLanes;
+
 /// A whole plain-VQ window, 8 vertices at a time: out[t * stride + i] = vq_value(mean, D8, D_W)
 /// for t < steps and i < count. Each vertex's D8 row (8 floats: one per block of steps) and each
 /// run of eight steps of its D_W row is one contiguous read, transposed in registers into the
 /// step rows; nothing is gathered. Returns false, doing nothing, where it does not apply (no
 /// lanes, fewer than 8 vertices, or a window that is not a multiple of 64, whose runs of eight
 /// steps would straddle two D8 blocks).
+///
+/// With `residual` (vertices 0..count-1 its lanes; count a multiple of 8, at most
+/// kResidualChunk), each value is written with its residual already added, as
+/// residual_window_lanes would add it: every row is written once instead of written, read back
+/// and written again.
 bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
                const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
-               std::uint64_t stride, std::uint32_t steps);
+               std::uint64_t stride, std::uint32_t steps, const ResidualLanes* residual = nullptr);
 
 /// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i] * 8] (mean + D8 of a block of steps;
 /// `t8` is the D8 codebook at the block's column).

@@ -26,12 +26,13 @@ constexpr std::uint64_t kGroup = BitBlocks::kGroupSize;
 // Vertices per parallel chunk of a one-step decode: below a few hundred thousand vertices
 // starting threads costs more than the decode (about 1 ns per vertex) itself.
 constexpr std::size_t kStepChunk = 1 << 18;
-// A page with a residual is decoded in runs of this many vertices, VQ base then residual, so
-// that the residual pass adds to rows still in L2 (128 KB for 64 steps): over a whole parallel
-// chunk (8192 vertices, 2 MB) it read them back from L3. 100K vertices x 128 steps, medians of
-// four alternated runs: eeg at 1e-3 8.6 -> 9.9 GB/s, smooth at 1e-2 21.8 -> 23.0 GB/s (runs of
-// 256 and 1024 did as well as 512).
-constexpr std::uint64_t kResidualRun = 512;
+// A page with a residual is decoded in runs of this many vertices. An aligned page's run is its
+// VQ base then its residual, so that the residual pass adds to rows still in L2 (128 KB for 64
+// steps): over a whole parallel chunk (8192 vertices, 2 MB) it read them back from L3 (on plain
+// pages, then decoded the same way: eeg at 1e-3 8.6 -> 9.9 GB/s, smooth at 1e-2 21.8 -> 23.0,
+// 100K vertices x 128 steps, medians of four alternated runs). A plain page's run is one
+// residual chunk (vq_residual_lanes).
+constexpr std::uint64_t kResidualRun = detail::kResidualChunk;
 
 bool is_vq(const EncodedPage& p) { return detail::uses_plain_vq(p.method); }
 bool is_aligned(const EncodedPage& p) { return detail::uses_aligned_vq(p.method); }
@@ -144,11 +145,36 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
   }
 }
 
-// Every step of vertices [b, e) of a page.
-void window_range(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* out) {
+// Every step of the whole lane blocks of [b, e) of a plain-VQ page with a residual,
+// kResidualChunk vertices at a time: their residual is unpacked first, then each VQ value is
+// written with it added (vq_window), so that every row is written once, not written by the VQ
+// pass and then read back and written again by the residual pass. Raw vertices are appended to
+// `special`. Returns where it stopped (b where it does not apply).
+std::uint64_t vq_residual_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* out,
+                                std::vector<std::uint64_t>& special) {
+  if (!detail::lanes_active() || p.window % 64 != 0) return b;  // vq_window's conditions
+  const std::uint64_t end = b + (e - b) / detail::kLanes * detail::kLanes;
+  for (std::uint64_t v0 = b; v0 < end; v0 += detail::kResidualChunk) {
+    const std::uint64_t lanes = std::min(detail::kResidualChunk, end - v0);
+    const detail::ResidualLanes r = detail::unpack_residual_lanes(p, v0, lanes, special);
+    // Should it not apply, the caller decodes the rest; raw vertices this chunk listed are
+    // decoded again there, to the same values.
+    if (!detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + v0, p.c8.data(), p.i8.data() + v0,
+                           p.cw.data(), p.window, p.iw.data() + v0, lanes, out + v0, p.vertex_count, p.step_count,
+                           &r))
+      return v0;
+  }
+  return end;
+}
+
+// Every step of vertices [from, e) of a page.
+void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, float* out) {
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
-  if (is_vq(p) && !detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data(),
+  thread_local std::vector<std::uint64_t> scalar;
+  scalar.clear();
+  const std::uint64_t b = is_vq(p) && has_residual(p) ? vq_residual_lanes(p, from, e, out, scalar) : from;
+  if (b < e && is_vq(p) && !detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data(),
                                      p.i8.data() + b, p.cw.data(), p.window, p.iw.data() + b, e - b, out + b, N, n)) {
     // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
     // then each step adds its D_W value (same float operations as vq_value), eight steps at a
@@ -204,9 +230,7 @@ void window_range(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float*
   }
   if (!has_residual(p) && p.method != PageMethod::predictive) return;
   thread_local std::vector<std::uint32_t> scratch;
-  thread_local std::vector<std::uint64_t> scalar;
   scratch.resize(n);
-  scalar.clear();
   std::uint64_t v = b;
   if (detail::lanes_active()) {
     v = b + (e - b) / detail::kLanes * detail::kLanes;
