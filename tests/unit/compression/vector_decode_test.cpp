@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <set>
+#include <string>
 
 #include "penumbra/compression/window_codec.h"
 #include "test_fields.h"
@@ -121,6 +122,26 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
     EXPECT_TRUE(codes->count(0) && codes->count(14) && codes->count(15));
     EXPECT_GE(codes->size(), 6u);  // and at least three plain widths
   }
+}
+
+// A plain page whose window is a multiple of 64 gets its residual written with the VQ values
+// (vq_window); any other window adds it in a pass of its own over the VQ rows. Both paths, with
+// every section kind, give the scalar decoders' bits.
+TEST(VectorDecode, ResidualPassOfAWindowNotAMultipleOf64GivesTheScalarBits) {
+  VectorDecodeGuard guard;
+  constexpr std::uint64_t N = 3003;
+  auto waves = testing::oscillating_sources(N, 96);
+  testing::add_outliers(waves);
+  CodecParams params = testing::small_plain_codebooks();
+  params.window = 96;
+  std::set<std::uint32_t> codes;
+  for (const float bound : {2e-4f, 1e-2f, 5e-2f}) {  // raw sections, dense, sparse (all-zero blocks)
+    const auto page = testing::shared_page(waves, 96, params, bound * waves.range());
+    ASSERT_EQ(page->method, PageMethod::vq_residual) << bound;
+    for (std::uint64_t v = 0; v < N; ++v) codes.insert(page->blocks.width(v));
+    expect_lanes_match_scalar(page, ("window of 96, bound " + std::to_string(bound)).c_str());
+  }
+  EXPECT_TRUE(codes.count(0) && codes.count(14) && codes.count(15)) << ::testing::PrintToString(codes);
 }
 
 TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
