@@ -239,15 +239,16 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
   // 4 ns for 8 lanes on some CPUs). Instead each lane keeps the 8 bytes from the byte holding its
   // next value, refilled every `run` indices: at most 7 bits of offset plus run slots of the
   // block's widest lane fit in the 64 bits. Even lanes sit in the low half of each 64-bit
-  // lane of `even`, odd lanes in `odd`, so that one shift and or packs them back in order.
+  // lane of `even`, odd lanes in `odd`, so that one shift and a blend put them back in order.
   alignas(32) std::uint32_t widths[kLanes];
   store(widths, w);
   const std::uint32_t widest = *std::max_element(widths, widths + kLanes);
   const std::uint32_t run = widest ? (64 - 7) / widest : count;
   const __m256i low = _mm256_set1_epi64x(0xFFFFFFFF), one = _mm256_set1_epi64x(1);
   const __m256i w_even = _mm256_and_si256(w, low), w_odd = _mm256_srli_epi64(w, 32);
-  const __m256i mask_even = _mm256_sub_epi64(_mm256_sllv_epi64(one, w_even), one);
-  const __m256i mask_odd = _mm256_sub_epi64(_mm256_sllv_epi64(one, w_odd), one);
+  // Slot widths are at most 31 bits, so each lane's value is masked in 32 bits after the even
+  // and odd results are put back in order (one mask instead of one per half).
+  const __m256i mask = _mm256_sub_epi32(_mm256_sllv_epi32(_mm256_set1_epi32(1), w), _mm256_set1_epi32(1));
   std::uint32_t* z = c.z.data() + j0;
   for (std::uint32_t i = 0; i < count;) {
     const __m256i byte = _mm256_srli_epi32(bit, 3), offset = _mm256_and_si256(bit, _mm256_set1_epi32(7));
@@ -257,9 +258,9 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
     const std::uint32_t end = std::min(count, i + run);
     bit = _mm256_add_epi32(bit, _mm256_mullo_epi32(w, _mm256_set1_epi32(int(end - i))));
     for (; i < end; ++i, z += Chunk::kLanesPerChunk) {
-      const __m256i e = _mm256_and_si256(_mm256_srlv_epi64(even, at_even), mask_even);
-      const __m256i o = _mm256_and_si256(_mm256_srlv_epi64(odd, at_odd), mask_odd);
-      store(z, in_lane_order(e, o));
+      const __m256i e = _mm256_srlv_epi64(even, at_even);
+      const __m256i o = _mm256_slli_epi64(_mm256_srlv_epi64(odd, at_odd), 32);
+      store(z, _mm256_and_si256(_mm256_blend_epi32(e, o, 0xAA), mask));
       at_even = _mm256_add_epi64(at_even, w_even);
       at_odd = _mm256_add_epi64(at_odd, w_odd);
     }

@@ -107,13 +107,14 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
         // Lanes without a residual keep the VQ value as it is (code 0 keeps -0.0f, as in the
         // scalar decoders); blocks without one (most, on sparse residuals) store it directly.
         const __m256 adds = kWithResidual ? _mm256_castsi256_ps(load(residual->adds + r0 + j)) : _mm256_setzero_ps();
-        if (kWithResidual && _mm256_movemask_ps(adds)) {
+        const int adding = kWithResidual ? _mm256_movemask_ps(adds) : 0;
+        if (adding) {
           const __m256 step = _mm256_set1_ps(residual->step);
           const std::uint32_t* z = residual->z + std::uint64_t(t) * kResidualStride + r0 + j;
           for (std::uint32_t k = 0; k < k_end; ++k, z += kResidualStride) {
             const __m256 value = _mm256_add_ps(bj, c[k]);
-            store(at + std::uint64_t(k) * stride + j,
-                  _mm256_blendv_ps(value, add_scaled(value, unzigzag_lanes(load(z)), step), adds));
+            const __m256 sum = add_scaled(value, unzigzag_lanes(load(z)), step);
+            store(at + std::uint64_t(k) * stride + j, adding == 0xFF ? sum : _mm256_blendv_ps(value, sum, adds));
           }
         } else {
           for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
