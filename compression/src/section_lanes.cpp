@@ -197,7 +197,8 @@ struct WindowChunk {
   static constexpr std::uint64_t kLanesPerChunk = kStride;
   alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
   /// Value i of lane j at z[i * kStride + j]. Thread-local and kept for the life of the worker
-  /// threads: 135 KiB for a residual chunk of 64 steps, at most 2.1 MiB (1024 steps).
+  /// threads: at most 270 KiB (a residual chunk of kResidualChunkSteps; 64 lanes of 1024 steps:
+  /// 256 KiB).
   std::vector<std::uint32_t> z;
 };
 
@@ -244,7 +245,7 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
   store(widths, w);
   const std::uint32_t widest = *std::max_element(widths, widths + kLanes);
   const std::uint32_t run = widest ? (64 - 7) / widest : count;
-  const __m256i low = _mm256_set1_epi64x(0xFFFFFFFF), one = _mm256_set1_epi64x(1);
+  const __m256i low = _mm256_set1_epi64x(0xFFFFFFFF);
   const __m256i w_even = _mm256_and_si256(w, low), w_odd = _mm256_srli_epi64(w, 32);
   // Slot widths are at most 31 bits, so each lane's value is masked in 32 bits after the even
   // and odd results are put back in order (one mask instead of one per half).
@@ -401,18 +402,35 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
 
 }  // namespace
 
-__attribute__((target("avx2"))) ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0,
-                                                                    std::uint64_t lanes,
-                                                                    std::vector<std::uint64_t>& special) {
+namespace {
+
+// The residual of vertices [v0, v0 + lanes) (at most kWidth), every step, unpacked into this
+// thread's chunk of kWidth lanes, its rows kStride apart.
+template <std::uint64_t kWidth, std::uint64_t kStride>
+__attribute__((target("avx2"))) WindowChunk<kWidth, kStride>& unpack_residual(const EncodedPage& p, std::uint64_t v0,
+                                                                              std::uint64_t lanes,
+                                                                              std::vector<std::uint64_t>& special) {
   const std::uint32_t n = p.step_count;
-  WindowChunk<kResidualChunk, kResidualStride>& c = thread_chunk<kResidualChunk, kResidualStride>();
-  c.z.resize(std::size_t(n) * kResidualStride);
+  WindowChunk<kWidth, kStride>& c = thread_chunk<kWidth, kStride>();
+  c.z.resize(std::size_t(n) * kStride);
   for (std::uint64_t j = 0; j < lanes; j += kLanes) {
     if (packed_codes(p, v0 + j) != 0)
       unpack_block(p, v0 + j, j, n, c, special);
     else  // sparse residuals: an all-zero block adds nothing and is not unpacked
       store(c.adds + j, _mm256_setzero_si256());
   }
+  return c;
+}
+
+// The residual pass's chunk (pages whose residual is added to VQ rows already written): 64
+// vertices, 256 bytes of each row, measured best for it.
+constexpr std::uint64_t kResidualPassChunk = 64;
+
+}  // namespace
+
+ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0, std::uint64_t lanes,
+                                    std::vector<std::uint64_t>& special) {
+  const auto& c = unpack_residual<kResidualChunk, kResidualStride>(p, v0, lanes, special);
   return {c.z.data(), c.adds, p.step};
 }
 
@@ -421,19 +439,20 @@ __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p,
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
   const __m256 step = _mm256_set1_ps(p.step);
-  for (std::uint64_t v0 = b; v0 < e; v0 += kResidualChunk) {
-    const std::uint64_t lanes = std::min(kResidualChunk, e - v0);
-    const ResidualLanes r = unpack_residual_lanes(p, v0, lanes, special);
-    std::uint64_t active[kResidualChunk / kLanes], count = 0;
+  constexpr std::uint64_t kChunkLanes = kResidualPassChunk;
+  for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
+    const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
+    const auto& c = unpack_residual<kChunkLanes, kChunkLanes>(p, v0, lanes, special);
+    std::uint64_t active[kChunkLanes / kLanes], count = 0;
     for (std::uint64_t j = 0; j < lanes; j += kLanes)
       if (packed_codes(p, v0 + j) != 0) active[count++] = j;
     float* row = window + v0;
-    const std::uint32_t* z = r.z;
-    for (std::uint32_t t = 0; t < n; ++t, row += N, z += kResidualStride)
+    const std::uint32_t* z = c.z.data();
+    for (std::uint32_t t = 0; t < n; ++t, row += N, z += kChunkLanes)
       for (std::uint64_t a = 0; a < count; ++a) {
         const std::uint64_t j = active[a];
         const __m256 base = load(row + j);
-        const __m256 adds = _mm256_castsi256_ps(load(r.adds + j));
+        const __m256 adds = _mm256_castsi256_ps(load(c.adds + j));
         store(row + j, _mm256_blendv_ps(base, add_scaled(base, unzigzag_lanes(load(z + j)), step), adds));
       }
   }

@@ -45,6 +45,10 @@ void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t 
 /// the L1 cache's sets and evicted one another (3-5 %).
 constexpr std::uint64_t kResidualChunk = 512, kResidualStride = 528;
 
+/// The most steps a page may have for unpack_residual_lanes: its thread's buffer then holds at
+/// most 270 KB, which stays in L2. Longer pages add their residual in a pass of its own.
+constexpr std::uint32_t kResidualChunkSteps = 128;
+
 /// The residual of up to kResidualChunk vertices, every step, as unpack_residual_lanes leaves it
 /// in the calling thread's buffers (valid until its next call there).
 struct ResidualLanes {
@@ -54,8 +58,8 @@ struct ResidualLanes {
 };
 
 /// Unpacks the residual of vertices [v0, v0 + lanes) (lanes a multiple of 8, at most
-/// kResidualChunk) of a vq_residual / vq_aligned_residual page; raw vertices are appended to
-/// `special`, for the caller's scalar path.
+/// kResidualChunk) of a vq_residual / vq_aligned_residual page of at most kResidualChunkSteps
+/// steps; raw vertices are appended to `special`, for the caller's scalar path.
 ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0, std::uint64_t lanes,
                                     std::vector<std::uint64_t>& special);
 
