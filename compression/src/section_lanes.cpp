@@ -194,7 +194,7 @@ PNB_LANES void prefetch_row(const float* at, std::uint64_t lanes) {
 // over their slots; then the prediction chain or the residual add runs on whole vectors.
 template <std::uint64_t kWidth, std::uint64_t kStride = kWidth>
 struct WindowChunk {
-  static constexpr std::uint64_t kLanesPerChunk = kStride;
+  static constexpr std::uint64_t kRowStride = kStride;  // z's values between one step and the next
   alignas(32) std::int32_t first[kWidth], linear[kWidth], adds[kWidth];
   /// Value i of lane j at z[i * kStride + j]. Thread-local and kept for the life of the worker
   /// threads: at most 270 KiB (a residual chunk of kResidualChunkSteps; 64 lanes of 1024 steps:
@@ -258,7 +258,7 @@ PNB_LANES void unpack_slots(const std::uint8_t* group, __m256i bit, __m256i w, s
     __m256i at_even = _mm256_and_si256(offset, low), at_odd = _mm256_srli_epi64(offset, 32);
     const std::uint32_t end = std::min(count, i + run);
     bit = _mm256_add_epi32(bit, _mm256_mullo_epi32(w, _mm256_set1_epi32(int(end - i))));
-    for (; i < end; ++i, z += Chunk::kLanesPerChunk) {
+    for (; i < end; ++i, z += Chunk::kRowStride) {
       const __m256i e = _mm256_srlv_epi64(even, at_even);
       const __m256i o = _mm256_slli_epi64(_mm256_srlv_epi64(odd, at_odd), 32);
       store(z, _mm256_and_si256(_mm256_blend_epi32(e, o, 0xAA), mask));
@@ -310,7 +310,7 @@ void patch_lane(const std::uint8_t* data, std::uint64_t at, std::uint32_t except
     std::memcpy(&word, data + (at >> 3), 8);
     word >>= at & 7;
     const auto i = static_cast<std::uint32_t>(word & position_mask);
-    if (i < count) z[std::uint64_t(i) * Chunk::kLanesPerChunk] = static_cast<std::uint32_t>((word >> pb) & value_mask);
+    if (i < count) z[std::uint64_t(i) * Chunk::kRowStride] = static_cast<std::uint32_t>((word >> pb) & value_mask);
   }
 }
 
