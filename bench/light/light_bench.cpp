@@ -405,7 +405,7 @@ int run(int argc, char** argv) {
         if (std::getenv("PNB_BENCH_LIGHT_VERBOSE"))
           std::cerr << start << " frame " << frames_to_converge << ": " << r.total_ms << " ms (resample "
                     << r.resample_ms << ", l0 " << r.l0_prop_ms << ", l1 " << r.l1_prop_ms << ", scatter "
-                    << r.l1_scatter_ms << ", iterations " << r.scatter_iterations << ", residual " << r.residual << ")\n";
+                    << r.l1_scatter_ms << ", passes " << r.level1_passes << ", iterations " << r.scatter_iterations << ", residual " << r.residual << ")\n";
         if (r.converged) {
           ++frames_to_converge;
           break;
