@@ -1,6 +1,5 @@
 // compression/src/section_lanes.h -- decodes the bit-packed sections of 8 neighbouring
-// vertices at once, one vector lane each (AVX2 gathers), for residual and predictive pages
-// (private).
+// vertices at once, one AVX2 vector lane each, for residual and predictive pages (private).
 //
 // Every lane reads its own section at its own offset and width, so the page format stays
 // per-vertex and randomly accessible; the scalar decoders' cost was the per-vertex chain of

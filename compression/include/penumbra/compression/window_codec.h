@@ -71,8 +71,8 @@ private:
   std::unique_ptr<detail::CursorState> m_state;
 };
 
-/// Whether the decoders may run 8 vertices per vector lane block (AVX2 gathers, where the CPU
-/// has them) for residual and predictive pages. On by default; results are bit-identical either
+/// Whether the decoders may run 8 vertices per vector lane block (AVX2, where the CPU has it)
+/// for residual and predictive pages. On by default; results are bit-identical either
 /// way, so turning it off only serves to check that and to measure the gain. Process-wide.
 void set_vector_decode(bool enabled);
 /// True when the vector decoders run (the CPU has AVX2 and set_vector_decode left them on).
