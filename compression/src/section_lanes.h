@@ -37,9 +37,9 @@ void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t 
 
 /// Vertices a chunk of unpack_residual_lanes holds, and the distance between its step rows of
 /// unpacked values. Plain-VQ pages write each chunk's VQ values with the residual added
-/// (vq_window), in rows of 2 KB. Against the VQ pass writing rows that a residual pass then read back and wrote again,
-/// eeg's residual windows (100K vertices x 128 steps, three alternated runs) decode 20-22 %
-/// faster; chunks of 64 and 256 vertices were slower (their short rows), 1024 no faster. The
+/// (vq_window), in rows of 2 KB. Against the VQ pass writing rows that a residual pass then read
+/// back and wrote again, eeg's residual windows (100K vertices x 128 steps, three alternated
+/// runs) decode 20-22 % faster; chunks of 64 and 256 vertices were slower (their short rows), 1024 no faster. The
 /// stride is padded by one cache line: at 512 floats the 64 step rows' lines fell into two of
 /// the L1 cache's sets and evicted one another (3-5 %).
 constexpr std::uint64_t kResidualChunk = 512, kResidualStride = 528;

@@ -187,11 +187,13 @@ void add_offsets(const float* table, const std::int32_t* offset, const float* le
   for (; i < count; ++i) out[i] = aligned_value(level[i], table[offset[i]]);
 }
 
+// Eight steps of a row must share one block of D8 (window a multiple of 64).
+bool vq_window_applies(std::uint32_t window) { return window % 64 == 0 && lanes_active(); }
+
 bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
                const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
                std::uint64_t stride, std::uint32_t steps, const ResidualLanes* residual) {
-  // Eight steps of a row must share one block of D8 (window a multiple of 64).
-  if (window % 64 != 0 || count < kLanes || !lanes_active()) return false;
+  if (!vq_window_applies(window) || count < kLanes) return false;
   const std::uint64_t i = lane_part(count);
   if (residual) {
     if (i != count || count > kResidualChunk) return false;

@@ -28,6 +28,10 @@ void add_offsets(const float* table, const std::int32_t* offset, const float* le
 
 struct ResidualLanes;
 
+/// Whether vq_window applies to pages of this window (given at least 8 vertices): lanes are
+/// active and the window is a multiple of 64.
+bool vq_window_applies(std::uint32_t window);
+
 /// A whole plain-VQ window, 8 vertices at a time: out[t * stride + i] = vq_value(mean, D8, D_W)
 /// for t < steps and i < count. Each vertex's D8 row (8 floats: one per block of steps) and each
 /// run of eight steps of its D_W row is one contiguous read, transposed in registers into the

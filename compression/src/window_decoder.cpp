@@ -152,8 +152,8 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
 // `special`. Returns where it stopped (b where it does not apply).
 std::uint64_t vq_residual_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* out,
                                 std::vector<std::uint64_t>& special) {
-  // vq_window's conditions, and unpack_residual_lanes's
-  if (!detail::lanes_active() || p.window % 64 != 0 || p.step_count > detail::kResidualChunkSteps) return b;
+  // Checked before any chunk is unpacked, so that none is unpacked in vain.
+  if (!detail::vq_window_applies(p.window) || p.step_count > detail::kResidualChunkSteps) return b;
   const std::uint64_t end = b + (e - b) / detail::kLanes * detail::kLanes;
   for (std::uint64_t v0 = b; v0 < end; v0 += detail::kResidualChunk) {
     const std::uint64_t lanes = std::min(detail::kResidualChunk, end - v0);
