@@ -236,8 +236,10 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index)
 }
 
 std::uint32_t CompressedField::max_method() const {
-  // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods.
-  return m_version >= 2 ? detail::kMaxMethod : std::uint32_t(PageMethod::predictive);
+  // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods,
+  // version 3 predictive_lanes.
+  if (m_version >= 3) return detail::kMaxMethod;
+  return m_version >= 2 ? std::uint32_t(PageMethod::vq_aligned_residual) : std::uint32_t(PageMethod::predictive);
 }
 
 void CompressedField::read_step(std::uint64_t step, float* out) const {

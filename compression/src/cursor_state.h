@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bit_io.h"
+#include "lane_blocks.h"
 #include "penumbra/compression/encoded_page.h"
 #include "value_layout.h"
 
@@ -28,6 +29,7 @@ struct CursorState {
   std::vector<std::int32_t> k1, k2;  ///< predictive: k at the last step and the one before
   std::vector<std::uint8_t> linear;  ///< predictive: 1 where the vertex's predictor extrapolates
   std::vector<std::uint64_t> raw;    ///< vertices stored as exact floats, increasing
+  std::vector<LaneBlockState> lane_blocks;  ///< predictive_lanes: each block's state after the last step
 };
 
 /// Values per vertex section: the page's steps, or one fewer for a predictive page.

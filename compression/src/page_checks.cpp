@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lane_blocks.h"
 #include "page_methods.h"
 #include "vertex_section.h"
 
@@ -81,6 +82,7 @@ std::string page_contents_error(const EncodedPage& p, std::vector<std::uint32_t>
     for (std::uint64_t v = 0; v < N; ++v)
       if (p.ia[v] >= K || p.shift[v] >= p.step_count) return at_vertex("aligned codebook index or shift out of range", v);
   if (has_bit_blocks(p.method)) return sections_error(p, derive);
+  if (p.method == PageMethod::predictive_lanes) return lane_blocks_error(p, nullptr);
   return {};
 }
 

@@ -1,10 +1,12 @@
 // compression/src/page_format.cpp
 #include "page_format.h"
 
+#include <bit>
 #include <cmath>
 
 #include "byte_io.h"
 #include "crc32.h"
+#include "lane_blocks.h"
 #include "page_checks.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
@@ -16,6 +18,39 @@ namespace {
 
 bool has_vq(PageMethod m) { return uses_plain_vq(m); }
 bool has_blocks(PageMethod m) { return has_bit_blocks(m); }
+
+// The tables of a predictive_lanes page in their stored order; each variable-length table's
+// size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
+void read_lane_blocks(ByteReader& r, EncodedPage& p) {
+  LaneBlocks& L = p.lanes;
+  p.step = r.get<float>();
+  p.lo = r.get<float>();
+  p.first_width = r.get<std::uint32_t>();
+  r.get<std::uint32_t>();
+  if (p.first_width < 1 || p.first_width > 31) r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
+  const std::uint64_t B = lane_block_count(p.vertex_count);
+  r.get_array(L.widths, 3 * B);
+  r.get_array(L.linear, B);
+  r.get_array(L.raw, B);
+  r.get_array(L.exception_rows, B);
+  std::uint64_t rows = 0, raw = 0, bits = 0;
+  for (std::uint64_t b = 0; b < B; ++b) {
+    rows += L.exception_rows[b];
+    raw += std::uint64_t(std::popcount(L.raw[b])) * p.step_count;
+    const std::uint32_t w1 = lane_width_1(L, b), w = lane_width(L, b);
+    if (w1 > 32 || w > 32 || lane_exception_width(L, b) > 32) r.fail("lane block width over 32 bits at block " + std::to_string(b));
+    bits += lane_block_bits(p.first_width, w1, w, p.step_count);
+  }
+  r.get_array(L.exception_steps, rows);
+  r.get_array(L.exception_lanes, rows);
+  std::uint64_t high_bits = 0;
+  for (std::uint64_t b = 0, at = 0; b < B; ++b)
+    for (std::uint32_t e = 0; e < L.exception_rows[b]; ++e, ++at)
+      high_bits += std::uint64_t(std::popcount(L.exception_lanes[at])) * lane_exception_width(L, b);
+  r.get_array(L.exception_bits, (high_bits + 7) / 8, 8);
+  r.get_array(L.raw_values, raw);
+  r.get_array(L.words, kLaneBlock * ((bits + 31) / 32 + 1));
+}
 
 }  // namespace
 
@@ -52,6 +87,22 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.put_array(p.blocks.group_offsets);
     w.put_array(p.blocks.widths);
     w.append(p.blocks.payload.data(), p.blocks.group_offsets.back());  // without the read padding
+  }
+  if (p.method == PageMethod::predictive_lanes) {
+    const LaneBlocks& L = p.lanes;
+    w.put(p.step);
+    w.put(p.lo);
+    w.put(p.first_width);
+    w.put(std::uint32_t(0));
+    w.put_array(L.widths);
+    w.put_array(L.linear);
+    w.put_array(L.raw);
+    w.put_array(L.exception_rows);
+    w.put_array(L.exception_steps);
+    w.put_array(L.exception_lanes);
+    w.append(L.exception_bits.data(), L.exception_bits.size() - 8);  // without the read padding
+    w.put_array(L.raw_values);
+    w.put_array(L.words);
   }
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();
@@ -147,9 +198,11 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     if (p.blocks.group_offsets.back() != r.remaining()) r.fail("bit payload size does not match its group table");
     r.get_array(p.blocks.payload, p.blocks.group_offsets.back(), 8);
   }
+  if (p.method == PageMethod::predictive_lanes) read_lane_blocks(r, p);
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the payload");
   // Value by value, after the bytes: the section walk also derives each section's start.
-  const std::string error = page_contents_error(p, &p.blocks.section_bits);
+  const std::string error = p.method == PageMethod::predictive_lanes ? lane_blocks_error(p, &p.lanes)
+                                                                     : page_contents_error(p, &p.blocks.section_bits);
   if (!error.empty()) r.fail(error);
   return p;
 }

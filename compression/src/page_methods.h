@@ -15,7 +15,9 @@ inline bool uses_aligned_vq(PageMethod m) {
 inline bool has_bit_blocks(PageMethod m) {
   return m == PageMethod::vq_residual || m == PageMethod::vq_aligned_residual || m == PageMethod::predictive;
 }
-constexpr std::uint32_t kMaxMethod = 4;
+/// The predictive coder, in per-vertex sections or in lane blocks.
+inline bool is_predictive(PageMethod m) { return m == PageMethod::predictive || m == PageMethod::predictive_lanes; }
+constexpr std::uint32_t kMaxMethod = 5;
 
 /// Windows are a multiple of 8 (D8 holds the means of 8 equal sub-blocks) in [8, 1024].
 inline bool valid_window(std::uint64_t window) { return window >= 8 && window <= 1024 && window % 8 == 0; }

@@ -116,7 +116,7 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
   require(page != nullptr, "StepCursor::decode: null page");
   const EncodedPage& p = *page;
   detail::require_decodable(p, "StepCursor::decode");
-  if (!detail::has_bit_blocks(p.method)) {
+  if (!detail::has_bit_blocks(p.method) && p.method != PageMethod::predictive_lanes) {
     m_page.reset();
     m_state.reset();
     decode_step(p, t, out);
@@ -129,6 +129,27 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
   const bool predictive = p.method == PageMethod::predictive;
   const bool follows = m_page == page && t == m_step + 1;
   m_step = t;
+  if (p.method == PageMethod::predictive_lanes) {
+    if (!m_state) m_state = std::make_unique<detail::CursorState>();
+    std::vector<detail::LaneBlockState>& blocks = m_state->lane_blocks;
+    const std::uint64_t B = detail::lane_block_count(N);
+    if (!follows) {
+      // Each block from its start to step t (O(t)); later steps then take one step each.
+      m_page = page;
+      blocks.resize(B);
+      parallel_for(B, kChunk / detail::kLaneBlock, [&](std::size_t b, std::size_t e) {
+        detail::lane_blocks_step(p, t, b, e, out, blocks.data() + b);
+      });
+      return;
+    }
+    parallel_for(B, kChunk / detail::kLaneBlock, [&](std::size_t b, std::size_t e) {
+      for (std::size_t k = b; k < e; ++k) {
+        detail::lane_block_step(p, k, blocks[k]);
+        detail::lane_block_write(p, k, blocks[k], out + k * detail::kLaneBlock);
+      }
+    });
+    return;
+  }
   if (!follows) {
     if (!m_state) m_state = std::make_unique<detail::CursorState>();
     detail::CursorState& s = *m_state;

@@ -6,6 +6,7 @@
 
 #include "bit_io.h"
 #include "cursor_state.h"
+#include "lane_blocks.h"
 #include "page_checks.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
@@ -325,6 +326,19 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     if (p.blocks.payload.size() < 8 || p.blocks.group_offsets.back() > p.blocks.payload.size() - 8)
       fail("bit payload shorter than its groups plus 8 bytes of padding");
   }
+  if (p.method == PageMethod::predictive_lanes) {
+    const LaneBlocks& L = p.lanes;
+    const std::uint64_t B = lane_block_count(N);
+    sized(L.widths.size(), 3 * B, "lane widths");
+    for (const auto* table : {&L.linear, &L.raw, &L.exception_rows}) sized(table->size(), B, "lane block table");
+    for (const auto* starts : {&L.bit_start, &L.raw_start}) sized(starts->size(), B + 1, "lane block starts");
+    for (const auto* starts : {&L.row_start, &L.high_start}) sized(starts->size(), B + 1, "lane block starts");
+    sized(L.exception_steps.size(), L.row_start.back(), "exception_steps");
+    sized(L.exception_lanes.size(), L.row_start.back(), "exception_lanes");
+    sized(L.highs.size(), L.high_start.back(), "highs");
+    sized(L.raw_values.size(), L.raw_start.back(), "raw_values");
+    sized(L.words.size(), kLaneBlock * ((L.bit_start.back() + 31) / 32 + 1), "lane words");
+  }
 }
 
 void validate_page(const EncodedPage& p) {
@@ -341,6 +355,11 @@ void decode_step(const EncodedPage& p, std::uint32_t t, float* out) {
   require(t < p.step_count, "decode_step: step " + std::to_string(t) + " is outside the page's " +
                                 std::to_string(p.step_count) + " steps");
   const std::uint64_t N = p.vertex_count;
+  if (p.method == PageMethod::predictive_lanes) {
+    parallel_for(detail::lane_block_count(N), kStepChunk / 4 / detail::kLaneBlock,
+                 [&](std::size_t b, std::size_t e) { detail::lane_blocks_step(p, t, b, e, out); });
+    return;
+  }
   if (p.method == PageMethod::predictive) {
     parallel_for(N, kStepChunk / 4,
                  [&](std::size_t b, std::size_t e) { detail::predictive_step_range(p, t, b, e, out); });
@@ -364,6 +383,11 @@ void decode_window(const EncodedPage& p, float* out) {
   // process busy on the other core some runs took four times as long (2.2 against 8.8 GB/s): a
   // descheduled worker holding a chunk keeps the caller waiting about 100 us.
   constexpr std::uint64_t kChunk = kGroup * 64;
+  if (p.method == PageMethod::predictive_lanes) {
+    parallel_for(detail::lane_block_count(N), kChunk / detail::kLaneBlock,
+                 [&](std::size_t b, std::size_t e) { detail::lane_blocks_window(p, b, e, out); });
+    return;
+  }
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     const std::uint64_t run = has_residual(p) ? kResidualRun : e - b;
     for (std::uint64_t s = b; s < e; s += run) window_range(p, s, std::min<std::uint64_t>(e, s + run), out);
@@ -375,6 +399,10 @@ void decode_vertex(const EncodedPage& p, std::uint64_t v, float* out) {
   require(out != nullptr, "decode_vertex: null output");
   require(v < p.vertex_count, "decode_vertex: vertex " + std::to_string(v) + " is outside the page's " +
                                   std::to_string(p.vertex_count) + " vertices");
+  if (p.method == PageMethod::predictive_lanes) {
+    detail::lane_blocks_vertex(p, v, out);
+    return;
+  }
   if (is_vq(p)) {
     std::vector<float> series(p.window);
     detail::vq_series(detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]), p.c8.data() + std::size_t(p.i8[v]) * 8,

@@ -10,6 +10,7 @@
 #include "bit_blocks_builder.h"
 #include "bit_io.h"
 #include "page_methods.h"
+#include "lane_blocks.h"
 #include "predictive_layout.h"
 #include "splitmix.h"
 #include "value_layout.h"
@@ -574,6 +575,9 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
     predictive_estimate = double(N) * (per_vertex_overhead + pred_bits / double(S) / 8);
     if (method == PageMethod::vq_residual && predictive_estimate < vq_estimate) method = PageMethod::predictive;
   }
+  // The estimate above is of per-vertex sections; lane blocks come out smaller where a run's
+  // first steps jump (their first step has a width of its own) and about the same elsewhere.
+  if (method == PageMethod::predictive && params.predictive_lanes) method = PageMethod::predictive_lanes;
   if (use_aligned && method == PageMethod::vq) method = PageMethod::vq_aligned;
   if (use_aligned && method == PageMethod::vq_residual) method = PageMethod::vq_aligned_residual;
   page.method = method;
@@ -583,7 +587,7 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
   page.predictive_bytes_estimate = float(predictive_estimate);
   const bool residual = method == PageMethod::vq_residual || method == PageMethod::vq_aligned_residual;
 
-  if (method == PageMethod::predictive) {
+  if (method == PageMethod::predictive || method == PageMethod::predictive_lanes) {
     page.step = step;
     page.lo = lo;
     page.first_width = first_width;
@@ -591,20 +595,27 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
     page.cw.clear();
     page.mean_q.clear();
     page.mean_lo = page.mean_scale = 0;
-    page.blocks = detail::build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
-      thread_local std::vector<float> x;
-      thread_local std::vector<std::int64_t> k;
-      thread_local std::vector<std::uint32_t> z;
-      x.resize((last - first) * W);
-      k.resize(W);
-      z.resize(W);
-      win.gather(first, last - first, x.data());
-      run([&](std::uint64_t v, BitWriter& writer) {
-        return encode_predictive(x.data() + (v - first) * W, n, lo, step, bound, first_width, &writer, k.data(),
-                                 z.data())
-            .code;
+    if (method == PageMethod::predictive_lanes) {
+      page.lanes = detail::build_lane_blocks(N, n, W, lo, step, bound, first_width,
+                                             [&](std::uint64_t first, std::uint64_t count, float* x) { win.gather(first, count, x); });
+      const std::string error = detail::lane_blocks_error(page, &page.lanes);
+      if (!error.empty()) throw Error(ErrorCode::internal_error, "encode_window: lane blocks: " + error);
+    } else {
+      page.blocks = detail::build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
+        thread_local std::vector<float> x;
+        thread_local std::vector<std::int64_t> k;
+        thread_local std::vector<std::uint32_t> z;
+        x.resize((last - first) * W);
+        k.resize(W);
+        z.resize(W);
+        win.gather(first, last - first, x.data());
+        run([&](std::uint64_t v, BitWriter& writer) {
+          return encode_predictive(x.data() + (v - first) * W, n, lo, step, bound, first_width, &writer, k.data(),
+                                   z.data())
+              .code;
+        });
       });
-    });
+    }
   } else if (use_aligned) {
     page.c8.clear();
     page.cw.clear();

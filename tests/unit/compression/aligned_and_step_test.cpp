@@ -242,6 +242,7 @@ TEST(AlignedFile, VersionOneFilesStillReadAndCannotHoldAlignedPages) {
   const auto f = testing::relaxing_front(300, 20);
   CodecParams p = small_params({BoundKind::range_relative, 1e-3});
   p.aligned = false;  // the pages a version-1 writer produced
+  p.predictive_lanes = false;
   const std::string v2 = temp_path("plain.pnbf"), v1 = temp_path("v1.pnbf");
   const auto current = write_field(f, v2, p);
   const auto v1_bytes = with_version(testing::read_file(v2), 1);
@@ -271,8 +272,12 @@ TEST(AlignedFile, VersionOneFilesStillReadAndCannotHoldAlignedPages) {
 TEST(StepDecode, SequentialPredictiveStepsEqualRandomAccessOnes) {
   // Noise is coded predictively; a cursor advances each vertex by one prediction per step.
   const auto f = testing::white_noise(3000, 40);
-  const auto page = std::make_shared<const EncodedPage>(encode(f, 0, 40, CodecParams{}, 1e-2f * f.range()));
-  ASSERT_EQ(page->method, PageMethod::predictive);
+  for (const bool lanes : {true, false}) {
+  SCOPED_TRACE(lanes ? "lane blocks" : "per-vertex sections");
+  CodecParams params;
+  params.predictive_lanes = lanes;
+  const auto page = std::make_shared<const EncodedPage>(encode(f, 0, 40, params, 1e-2f * f.range()));
+  ASSERT_EQ(page->method, lanes ? PageMethod::predictive_lanes : PageMethod::predictive);
   StepCursor cursor;
   std::vector<float> a(3000), b(3000);
   std::vector<std::uint32_t> order;
@@ -285,22 +290,28 @@ TEST(StepDecode, SequentialPredictiveStepsEqualRandomAccessOnes) {
     ASSERT_LE(max_abs_error(f.values.data() + std::uint64_t(t) * 3000, a.data(), 3000), 1e-2 * f.range());
   }
   // A cursor moves to another page by itself.
-  const auto other = std::make_shared<const EncodedPage>(encode(f, 0, 40, CodecParams{}, 2e-2f * f.range()));
+  const auto other = std::make_shared<const EncodedPage>(encode(f, 0, 40, params, 2e-2f * f.range()));
   cursor.decode(other, 1, a.data());
   decode_step(*other, 1, b.data());
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * 4));
+  }
 }
 
 TEST(StepDecode, PagerPlaysPredictivePagesLikeRandomAccess) {
   const auto f = testing::white_noise(2000, 37);
-  const auto field = write_field(f, temp_path("noise.pnbf"), small_params({BoundKind::range_relative, 1e-2}));
-  ASSERT_EQ(field->page(0).method, PageMethod::predictive);
+  for (const bool lanes : {true, false}) {
+  SCOPED_TRACE(lanes ? "lane blocks" : "per-vertex sections");
+  CodecParams params = small_params({BoundKind::range_relative, 1e-2});
+  params.predictive_lanes = lanes;
+  const auto field = write_field(f, temp_path("noise.pnbf"), params);
+  ASSERT_EQ(field->page(0).method, lanes ? PageMethod::predictive_lanes : PageMethod::predictive);
   Pager pager(field);
   std::vector<float> a(2000), b(2000);
   for (std::uint64_t t : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 3, 4, 36, 35, 36}) {
     pager.read_step(t, a.data());
     field->read_step(t, b.data());
     ASSERT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * 4)) << "step " << t;
+  }
   }
 }
 
@@ -311,11 +322,14 @@ TEST(StepDecode, SectionOffsetsMatchAWalkOverEachGroup) {
   f.values[3 * 1000 + 10] += 50.f;  // an outlier: patched section
   f.values[5 * 1000 + 20] = 1e4f;   // beyond any quantised residual (2^20 steps): raw section
   const std::string path = temp_path("sections.pnbf");
-  const auto field = write_field(f, path, small_params({BoundKind::absolute, 1e-3}));
+  CodecParams sections = small_params({BoundKind::absolute, 1e-3});
+  sections.predictive_lanes = false;
+  const auto field = write_field(f, path, sections);
   const auto loaded = field->load_page(0);
   ASSERT_NE(loaded->method, PageMethod::vq);  // residual or predictive: both have sections
   WarmStart warm;
-  const auto encoded = encode_window(f.values.data(), 1000, 16, f.times.data(), 0, small_params(), 1e-3f, &warm);
+  sections.bound = {};
+  const auto encoded = encode_window(f.values.data(), 1000, 16, f.times.data(), 0, sections, 1e-3f, &warm);
   ASSERT_EQ(loaded->blocks.section_bits, encoded.blocks.section_bits);
   ASSERT_EQ(loaded->blocks.section_bits.size(), 1000u);
   bool patched = false, raw = false;

@@ -131,7 +131,7 @@ TEST(WindowCodec, NoiseIsDetectedAsVqPoorAndCodedPredictively) {
   const float bound = 1e-2f * f.range();
   WindowStats stats;
   const auto page = encode_window(f.values.data(), f.vertices, 64, f.times.data(), 0, CodecParams{}, bound, nullptr, &stats);
-  EXPECT_EQ(page.method, PageMethod::predictive);
+  EXPECT_EQ(page.method, PageMethod::predictive_lanes);
   EXPECT_LT(stats.predictive_bytes_estimate, stats.vq_bytes_estimate);
   EXPECT_LT(stats.sample_snr_db, 6.0);
   std::vector<float> out(f.values.size());
@@ -139,7 +139,7 @@ TEST(WindowCodec, NoiseIsDetectedAsVqPoorAndCodedPredictively) {
   EXPECT_LE(compare(f.values.data(), out.data(), out.size(), f.range()).max_abs, bound);
   // Unbounded, noise falls back to the predictive coder at VQ's own RMS error.
   const auto unbounded = encode(f, 0, 64, CodecParams{});
-  EXPECT_EQ(unbounded.method, PageMethod::predictive);
+  EXPECT_EQ(unbounded.method, PageMethod::predictive_lanes);
   decode_window(unbounded, out.data());
   EXPECT_LE(compare(f.values.data(), out.data(), out.size(), f.range()).max_abs, unbounded.bound);
 }
@@ -254,6 +254,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   p.window = 16;
   p.codebook_size = 8;
   p.aligned = false;
+  p.predictive_lanes = false;  // per-vertex sections (lane blocks: lane_blocks_test.cpp)
   const EncodedPage vq = encode(f, 0, 16, p);
   ASSERT_TRUE(vq.method == PageMethod::vq) << to_string(vq.method);
   const EncodedPage blocks = encode(f, 0, 16, p, 1e-4f * f.range());
@@ -320,8 +321,12 @@ TEST(WindowCodec, IsolatedOutliersArePatchedAndStayRandomlyAccessible) {
   const float spike = 0.5f * f.range();
   for (std::uint64_t v = 0; v < f.vertices; ++v) f.values[(v * 7 % 64) * f.vertices + v] += spike;
   const float bound = 1e-2f * f.range();
-  const auto page = encode(f, 0, 64, CodecParams{}, bound);
-  ASSERT_NE(page.method, PageMethod::vq);
+  CodecParams sections;
+  sections.predictive_lanes = false;
+  const auto page = encode(f, 0, 64, sections, bound);
+  ASSERT_TRUE(page.method == PageMethod::vq_residual || page.method == PageMethod::vq_aligned_residual ||
+              page.method == PageMethod::predictive)
+      << to_string(page.method);
   std::size_t patched = 0;
   for (std::uint64_t v = 0; v < f.vertices; ++v) patched += page.blocks.width(v) == 14;
   EXPECT_GT(patched, f.vertices / 2) << to_string(page.method);

@@ -78,7 +78,11 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
 
   auto noise = testing::white_noise(N, 37);
   testing::add_outliers(noise);
-  const CodecParams plain = testing::small_plain_codebooks();
+  // Per-vertex sections first; the same fields in lane blocks at the end.
+  CodecParams sections, plain = testing::small_plain_codebooks();
+  sections.predictive_lanes = plain.predictive_lanes = false;
+  CodecParams plain_lanes = plain;
+  plain_lanes.predictive_lanes = true;
   auto blobs = testing::smooth_blobs(N, 40);
   testing::add_outliers(blobs);
   auto waves = testing::oscillating_sources(N, 64);
@@ -95,9 +99,9 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
     float bound;
   };
   const std::vector<Case> cases = {
-      {"noise, predictive", &noise, 37, CodecParams{}, 2e-2f * noise.range()},
-      {"noise, partial window", &noise, 21, CodecParams{}, 5e-3f * noise.range()},
-      {"noise, tight bound", &noise, 37, CodecParams{}, 1e-5f * noise.range()},
+      {"noise, predictive", &noise, 37, sections, 2e-2f * noise.range()},
+      {"noise, partial window", &noise, 21, sections, 5e-3f * noise.range()},
+      {"noise, tight bound", &noise, 37, sections, 1e-5f * noise.range()},
       {"blobs, predictive", &blobs, 40, plain, 1e-3f * blobs.range()},
       {"waves, residual", &waves, 64, plain, 1e-2f * waves.range()},
       {"waves, sparse residual", &waves, 64, plain, 5e-2f * waves.range()},
@@ -105,10 +109,20 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
       {"waves with outliers, tight bound", &waves_outliers, 64, plain, 2e-4f * waves.range()},
       {"waves with outliers, partial window", &waves_outliers, 29, plain, 1e-2f * waves.range()},
       {"front, aligned residual", &front, 64, aligned, 1e-2f * front.range()},
+      {"noise, lane blocks", &noise, 37, CodecParams{}, 2e-2f * noise.range()},
+      {"noise, lane blocks, partial window", &noise, 21, CodecParams{}, 5e-3f * noise.range()},
+      {"noise, lane blocks, tight bound", &noise, 37, CodecParams{}, 1e-5f * noise.range()},
+      {"blobs, lane blocks", &blobs, 40, plain_lanes, 1e-3f * blobs.range()},
   };
+  std::uint64_t lane_exceptions = 0;
   for (const Case& c : cases) {
     const auto page = testing::shared_page(*c.field, c.steps, c.params, c.bound);
     methods.insert(page->method);
+    if (page->method == PageMethod::predictive_lanes) {
+      lane_exceptions += page->lanes.exception_steps.size();
+      expect_lanes_match_scalar(page, c.what);
+      continue;
+    }
     auto& codes = page->method == PageMethod::predictive ? predictive_codes : residual_codes;
     for (std::uint64_t v = 0; v < N; ++v) codes.insert(page->blocks.width(v));
     expect_lanes_match_scalar(page, c.what);
@@ -116,6 +130,8 @@ TEST(VectorDecode, LanesGiveTheScalarDecodersBitsOnEveryMethodAndSectionKind) {
   // The cases reach what they are meant to: every method with bit blocks, and on both kinds
   // of page empty (0), plain, patched (14) and raw (15) sections.
   EXPECT_TRUE(methods.count(PageMethod::predictive));
+  EXPECT_TRUE(methods.count(PageMethod::predictive_lanes));
+  EXPECT_GT(lane_exceptions, 0u);
   EXPECT_TRUE(methods.count(PageMethod::vq_residual));
   EXPECT_TRUE(methods.count(PageMethod::vq_aligned_residual));
   for (const auto* codes : {&residual_codes, &predictive_codes}) {

@@ -44,6 +44,9 @@ struct CodecParams {
   /// Without a bound: a window whose VQ signal-to-noise ratio (on the training sample) is
   /// below this is stored with the predictive coder at a bound equal to VQ's RMS error.
   double min_vq_snr_db = 12.0;
+  /// Predictive pages in blocks of 16 vertices (PageMethod::predictive_lanes). Off: per-vertex
+  /// sections (PageMethod::predictive), as files of format versions 1 and 2 hold them.
+  bool predictive_lanes = true;
 };
 
 /// How one page is stored; recorded in its header.
@@ -57,6 +60,10 @@ enum class PageMethod : std::uint32_t {
   /// lands on the vertex's step `shift`. 4 bytes per vertex, codebook stored in 16 bits.
   vq_aligned = 3,
   vq_aligned_residual = 4,  ///< vq_aligned plus a quantised residual that holds the error bound
+  /// The predictive coder with its integers in blocks of 16 vertices that share their widths
+  /// (format version 3; LaneBlocks): smaller than per-vertex sections where a run's first steps
+  /// jump, and a whole window decodes several times faster.
+  predictive_lanes = 5,
 };
 
 const char* to_string(PageMethod method);

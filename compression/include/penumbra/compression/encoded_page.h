@@ -32,13 +32,39 @@ struct BitBlocks {
   bool empty() const { return group_offsets.empty(); }
 };
 
+/// The predictive coder's integers in blocks of 16 neighbouring vertices
+/// (PageMethod::predictive_lanes; layout in compression/src/lane_blocks.h). The values of a
+/// block share their widths and are interleaved across its 16 lanes, so one step of a block is
+/// one uniform shift of a row of 16 words: no per-vertex offsets, widths or loads.
+struct LaneBlocks {
+  static constexpr std::uint32_t kLanes = 16;
+  std::vector<std::uint8_t> widths;        ///< per block: step 1's width, the later steps' width, the exceptions' high-part width
+  std::vector<std::uint16_t> linear;       ///< per block: lanes whose predictor extrapolates (bit l: lane l)
+  std::vector<std::uint16_t> raw;          ///< per block: lanes stored as exact float32 values instead
+  std::vector<std::uint16_t> exception_rows;  ///< per block: steps with an exception
+  std::vector<std::uint16_t> exception_steps;  ///< per exception row: its step, increasing within a block
+  std::vector<std::uint16_t> exception_lanes;  ///< per exception row: its lanes (nonzero)
+  std::vector<std::uint8_t> exception_bits;    ///< high parts, each block's at its width, LSB first; 8 bytes of padding
+  std::vector<float> raw_values;               ///< raw lanes' values, block by block, lane by lane, step by step
+  std::vector<std::uint32_t> words;            ///< rows of 16 words: lane l's bits run down column l; one spare row
+  /// Derived when a page is built or parsed, not stored: where each block starts (its bit in
+  /// every lane's column, its first exception row, high part and raw value), plus the end, and
+  /// the high parts unpacked to 32 bits.
+  std::vector<std::uint64_t> bit_start, raw_start;
+  std::vector<std::uint32_t> row_start, high_start;
+  std::vector<std::uint32_t> highs;
+
+  std::uint64_t block_count() const { return linear.size(); }
+  bool empty() const { return linear.empty(); }
+};
+
 /// One window of one field, decoded from (or about to be written as) one page.
 /// Reconstruction of step t (0 <= t < step_count) at vertex v, in float, in this order:
 ///   vq:           ((mean(v) + c8[i8[v]][t / (window/8)]) + cw[iw[v]][t])
 ///   vq_residual:  vq + float(q) * step, or the stored exact value for raw vertices
 ///   vq_aligned:   mean(v) + ca[ia[v]][t + window - 1 - shift[v]]  (mean(v) is the level)
 ///   vq_aligned_residual: vq_aligned + float(q) * step, or raw values
-///   predictive:   lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
+///   predictive, predictive_lanes: lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
 /// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale.
 struct EncodedPage {
   PageMethod method = PageMethod::vq;
@@ -74,6 +100,7 @@ struct EncodedPage {
   float lo = 0;                ///< predictive: value of k = 0
   std::uint32_t first_width = 0;  ///< predictive: bits of k_0
   BitBlocks blocks;
+  LaneBlocks lanes;  ///< predictive_lanes (step, lo and first_width as for predictive)
 
   /// Bytes this page holds in memory (what a pager counts against its cap).
   std::uint64_t resident_bytes() const;

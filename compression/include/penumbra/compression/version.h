@@ -7,5 +7,7 @@ namespace penumbra::compression {
 ///   1  pages vq, vq_residual, predictive
 ///   2  adds the shift-aligned pages (vq_aligned, vq_aligned_residual); layouts of the
 ///      version-1 page kinds are unchanged, so a version-1 file reads as before
-constexpr int kContainerFormatVersion = 2;
+///   3  adds predictive_lanes pages (the predictive coder in blocks of 16 vertices); the
+///      other layouts are unchanged
+constexpr int kContainerFormatVersion = 3;
 }  // namespace penumbra::compression

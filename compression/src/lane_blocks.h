@@ -1,0 +1,95 @@
+// compression/src/lane_blocks.h -- predictive_lanes pages: the predictive coder's integers in
+// blocks of 16 vertices (private).
+//
+// Block b holds vertices 16 b .. 16 b + 15, one per lane; the last block's lanes past the page's
+// vertices are padding (zero, never written out). Lane l's bits run down column l of `words`:
+// word 16 r + l holds lane l's bits 32 r .. 32 r + 31, LSB first. A block starts at the same bit
+// bit_start[b] of every column and holds there, in each lane, for a page of n steps:
+//   k_0         first_width bits (the page's), k_0 itself
+//   step 1      w1 bits: k_1 - k_0 + 2^(w1-1)  (offset binary; width 0: the difference is 0)
+//   step t >= 2 w bits each: k_t - prediction_t + 2^(w-1), the prediction being
+//               2 k_{t-1} - k_{t-2} in `linear` lanes and k_{t-1} in the others
+// Blocks follow each other without gaps, so a block takes first_width + w1 + (n-2) w bits of
+// each column (fewer for n < 3). A run's first step often jumps, so it has a width of its own.
+// A difference too wide for its step's width is an exception: the block lists the step's row
+// (step, lanes), and the high part h = floor((d + bias) / 2^width), zigzag-coded at the block's
+// exception width x, follows in exception_bits; the slot holds the low bits. Raw lanes (values
+// that lo + k step cannot hold within the bound) read 0 in every slot and take their n exact
+// floats from raw_values. All integer arithmetic wraps in 32 bits, so that the scalar and the
+// vector decoders agree exactly.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "bit_io.h"
+#include "penumbra/compression/encoded_page.h"
+
+namespace penumbra::compression::detail {
+
+constexpr std::uint64_t kLaneBlock = LaneBlocks::kLanes;
+
+inline std::uint64_t lane_block_count(std::uint64_t vertices) { return (vertices + kLaneBlock - 1) / kLaneBlock; }
+
+inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b]; }
+inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 1]; }
+inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 2]; }
+
+/// Bits a block takes in each column.
+inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1, std::uint32_t w, std::uint32_t steps) {
+  return first_width + (steps >= 2 ? w1 : 0) + (steps >= 3 ? std::uint64_t(steps - 2) * w : 0);
+}
+
+inline std::uint32_t low_mask(std::uint32_t width) { return width >= 32 ? ~0u : (1u << width) - 1; }
+inline std::uint32_t offset_bias(std::uint32_t width) { return width ? 1u << (width - 1) : 0u; }
+
+/// Lane l's `width` bits at bit `pos` of its column (the spare row makes word row + 1 readable).
+inline std::uint32_t lane_slot(const std::uint32_t* words, std::uint64_t pos, std::uint32_t lane, std::uint32_t width) {
+  const std::uint64_t row = pos >> 5;
+  const std::uint64_t pair = (std::uint64_t(words[(row + 1) * kLaneBlock + lane]) << 32) | words[row * kLaneBlock + lane];
+  return std::uint32_t(pair >> (pos & 31)) & low_mask(width);
+}
+
+/// One block's decoder state: k at the last two steps of every lane, and where the block's
+/// next step, exception row and high part are.
+struct LaneBlockState {
+  std::uint32_t k1[kLaneBlock], k2[kLaneBlock];
+  std::uint32_t t = 0;
+  std::uint64_t pos = 0;
+  std::uint32_t row = 0, high = 0;
+};
+
+/// Points `s` at step 0 of block b.
+void lane_block_begin(const EncodedPage& p, std::uint64_t b, LaneBlockState& s);
+
+/// Decodes step s.t of block b into s.k1 (the step before moves to s.k2) and moves on.
+void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s);
+
+/// Writes the current step (s.t - 1) of block b's vertices to row[v - 16 b], raw lanes included.
+void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockState& s, float* row);
+
+/// decode_window for blocks [b, e) into window[t * vertex_count + v].
+void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window);
+
+/// Step t of blocks [b, e) from each block's start: O(t). Leaves each block's state after step
+/// t in states[block - b] when given (a cursor starting at t).
+void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
+                      LaneBlockState* states = nullptr);
+
+/// Vertex v's whole window.
+void lane_blocks_vertex(const EncodedPage& p, std::uint64_t v, float* out);
+
+/// Encodes a window of N vertices into lane blocks. gather(first, count, x) writes vertices
+/// [first, first + count) to x, `window` floats each (the first `steps` meaningful). The
+/// derived tables are filled as a parsed page's are.
+LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
+                             float bound, std::uint32_t first_width,
+                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather);
+
+/// Checks a predictive_lanes page's tables value by value (they must describe exactly the bits
+/// and values stored, within their arrays) and derives bit_start, raw_start, row_start,
+/// high_start and highs. With `derive`, writes them there; without, compares them with the
+/// page's own. Returns an empty string or what is wrong.
+std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive);
+
+}  // namespace penumbra::compression::detail

@@ -1,0 +1,204 @@
+// compression/src/lane_blocks_encoder.cpp -- the predictive coder's integers written as lane
+// blocks (lane_blocks.h): chunks of blocks in parallel, then their columns joined at bit offsets.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <vector>
+
+#include "lane_blocks.h"
+#include "penumbra/core/thread_pool.h"
+
+namespace penumbra::compression::detail {
+
+namespace {
+
+// Bits of an offset-binary slot that holds d: -2^(w-1) <= d < 2^(w-1); width 0 holds only 0.
+std::uint32_t signed_width(std::int32_t d) {
+  return d == 0 ? 0u : bit_width(std::uint32_t(d ^ (d >> 31))) + 1;
+}
+
+// One chunk's blocks, with its columns starting at bit 0 (placed at their offset when joined).
+struct Chunk {
+  std::vector<std::uint8_t> widths;
+  std::vector<std::uint16_t> linear, raw, exception_rows, exception_steps, exception_lanes;
+  std::vector<std::uint32_t> highs;  // zigzag high parts, each at its block's width
+  std::vector<float> raw_values;
+  std::vector<std::uint32_t> words;
+  std::uint64_t bits = 0;
+};
+
+constexpr std::uint64_t kChunkBlocks = 64;
+
+class ChunkWriter {
+public:
+  explicit ChunkWriter(Chunk& c) : m_c(c) {}
+  void put(std::uint32_t lane, std::uint64_t pos, std::uint32_t width, std::uint32_t value) {
+    if (width == 0) return;
+    const std::uint64_t row = pos >> 5;
+    const std::uint32_t sh = std::uint32_t(pos & 31);
+    if ((row + 2) * kLaneBlock > m_c.words.size()) m_c.words.resize((row + 2) * kLaneBlock * 2, 0);
+    m_c.words[row * kLaneBlock + lane] |= value << sh;
+    if (sh + width > 32) m_c.words[(row + 1) * kLaneBlock + lane] |= value >> (32 - sh);
+  }
+
+private:
+  Chunk& m_c;
+};
+
+// Encodes one block of `lanes` vertices (x: their windows, `window` floats apart) into c.
+void encode_block(const float* x, std::uint64_t lanes, std::uint32_t n, std::uint32_t window, float lo, float step,
+                  float bound, std::uint32_t fw, Chunk& c, ChunkWriter& out, std::vector<std::int32_t>& d) {
+  // k per lane and step; raw lanes and padding read 0 everywhere.
+  std::uint32_t k[kLaneBlock][2] = {};
+  std::uint16_t raw = 0, linear = 0;
+  d.assign(kLaneBlock * std::size_t(n), 0);  // d[l * n + t]: step t's difference from its prediction
+  std::vector<std::uint32_t> kk(n);
+  for (std::uint64_t l = 0; l < lanes; ++l) {
+    const float* xl = x + l * window;
+    bool fits = true;
+    for (std::uint32_t t = 0; t < n && fits; ++t) {
+      const double kd = std::nearbyint((double(xl[t]) - lo) / step);
+      const float rebuilt = lo + float(kd) * step;
+      fits = kd >= 0 && kd < double(1ull << fw) && std::fabs(double(xl[t]) - double(rebuilt)) <= bound;
+      kk[t] = fits ? std::uint32_t(kd) : 0;
+    }
+    if (!fits) {
+      raw |= std::uint16_t(1u << l);
+      c.raw_values.insert(c.raw_values.end(), xl, xl + n);
+      continue;
+    }
+    k[l][0] = kk[0];
+    // Whichever predictor needs fewer bits over steps 2.. (step 1 predicts k_0 either way).
+    std::uint64_t cost[2] = {0, 0};
+    for (std::uint32_t t = 2; t < n; ++t) {
+      cost[0] += signed_width(std::int32_t(kk[t] - kk[t - 1]));
+      cost[1] += signed_width(std::int32_t(kk[t] - (2u * kk[t - 1] - kk[t - 2])));
+    }
+    const bool extrapolate = cost[1] < cost[0];
+    if (extrapolate) linear |= std::uint16_t(1u << l);
+    for (std::uint32_t t = 1; t < n; ++t) {
+      const std::uint32_t prediction = extrapolate && t >= 2 ? 2u * kk[t - 1] - kk[t - 2] : kk[t - 1];
+      d[l * n + t] = std::int32_t(kk[t] - prediction);
+    }
+  }
+  // Step 1 gets the width of its widest lane; the later steps the width with the fewest bits,
+  // counting each exception row (32 bits) and high part (at most wmax - w + 1 bits).
+  std::uint32_t w1 = 0, wmax = 0;
+  std::uint64_t histogram[34] = {}, step_max[34] = {};
+  if (n >= 2)
+    for (std::uint64_t l = 0; l < kLaneBlock; ++l) w1 = std::max(w1, signed_width(d[l * n + 1]));
+  for (std::uint32_t t = 2; t < n; ++t) {
+    std::uint32_t m = 0;
+    for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
+      const std::uint32_t s = signed_width(d[l * n + t]);
+      ++histogram[s];
+      m = std::max(m, s);
+    }
+    ++step_max[m];
+    wmax = std::max(wmax, m);
+  }
+  std::uint32_t w = wmax;
+  std::uint64_t best = ~0ull;
+  for (std::uint32_t c_w = 0; c_w <= wmax; ++c_w) {
+    std::uint64_t exceptions = 0, rows = 0;
+    for (std::uint32_t s = c_w + 1; s <= wmax; ++s) exceptions += histogram[s], rows += step_max[s];
+    const std::uint64_t bits = kLaneBlock * std::uint64_t(n - 2) * c_w + 32 * rows + exceptions * (wmax - c_w + 1);
+    if (bits < best) best = bits, w = c_w;
+  }
+  if (n < 3) w = 0;
+  // Slots, exception rows and high parts.
+  std::uint64_t pos = c.bits;
+  for (std::uint64_t l = 0; l < kLaneBlock; ++l) out.put(std::uint32_t(l), pos, fw, k[l][0]);
+  pos += fw;
+  std::uint32_t high_width = 0;
+  const std::size_t rows_before = c.exception_steps.size();
+  for (std::uint32_t t = 1; t < n; ++t) {
+    const std::uint32_t width = t == 1 ? w1 : w, bias = offset_bias(width);
+    std::uint16_t lanes = 0;
+    for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
+      const std::int64_t v = std::int64_t(d[l * n + t]) + bias;
+      const std::uint32_t low = std::uint32_t(v) & low_mask(width);
+      out.put(std::uint32_t(l), pos, width, low);
+      if (signed_width(d[l * n + t]) > width) {
+        // Exact: v - low is a multiple of 2^width (width < 32 here).
+        const std::int32_t high = std::int32_t((v - std::int64_t(low)) >> width);
+        lanes |= std::uint16_t(1u << l);
+        c.highs.push_back(zigzag(high));
+        high_width = std::max(high_width, bit_width(zigzag(high)));
+      }
+    }
+    if (lanes) {
+      c.exception_steps.push_back(std::uint16_t(t));
+      c.exception_lanes.push_back(lanes);
+    }
+    pos += width;
+  }
+  c.exception_rows.push_back(std::uint16_t(c.exception_steps.size() - rows_before));
+  c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(w), std::uint8_t(high_width)});
+  c.linear.push_back(linear);
+  c.raw.push_back(raw);
+  c.bits = pos;
+}
+
+}  // namespace
+
+LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
+                             float bound, std::uint32_t first_width,
+                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather) {
+  const std::uint64_t B = lane_block_count(N), chunks = (B + kChunkBlocks - 1) / kChunkBlocks;
+  std::vector<Chunk> done(chunks);
+  parallel_for(chunks, 1, [&](std::size_t c0, std::size_t c1) {
+    thread_local std::vector<float> x;
+    thread_local std::vector<std::int32_t> d;
+    for (std::size_t c = c0; c < c1; ++c) {
+      Chunk& chunk = done[c];
+      ChunkWriter writer(chunk);
+      const std::uint64_t first = c * kChunkBlocks * kLaneBlock, count = std::min(N - first, kChunkBlocks * kLaneBlock);
+      x.resize(count * window);
+      gather(first, count, x.data());
+      for (std::uint64_t v = 0; v < count; v += kLaneBlock)
+        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), steps, window, lo, step,
+                     bound, first_width, chunk, writer, d);
+    }
+  });
+  // Join: tables concatenated, each chunk's columns ORed in at its bit offset, high parts packed.
+  LaneBlocks L;
+  std::uint64_t bits = 0;
+  for (const Chunk& c : done) bits += c.bits;
+  const std::uint64_t rows = (bits + 31) / 32 + 1;
+  L.words.assign((rows + 2) * kLaneBlock, 0);
+  std::vector<std::uint8_t> high_bytes;
+  BitWriter high_writer(high_bytes);
+  std::uint64_t at = 0;
+  for (const Chunk& c : done) {
+    L.widths.insert(L.widths.end(), c.widths.begin(), c.widths.end());
+    L.linear.insert(L.linear.end(), c.linear.begin(), c.linear.end());
+    L.raw.insert(L.raw.end(), c.raw.begin(), c.raw.end());
+    L.exception_rows.insert(L.exception_rows.end(), c.exception_rows.begin(), c.exception_rows.end());
+    L.exception_steps.insert(L.exception_steps.end(), c.exception_steps.begin(), c.exception_steps.end());
+    L.exception_lanes.insert(L.exception_lanes.end(), c.exception_lanes.begin(), c.exception_lanes.end());
+    L.raw_values.insert(L.raw_values.end(), c.raw_values.begin(), c.raw_values.end());
+    std::size_t h = 0, r = 0;
+    for (std::size_t b = 0; b < c.linear.size(); ++b) {
+      const std::uint32_t x = c.widths[3 * b + 2];
+      for (std::uint32_t e = 0; e < c.exception_rows[b]; ++e, ++r)
+        for (int lane = std::popcount(c.exception_lanes[r]); lane > 0; --lane) high_writer.put(c.highs[h++], x);
+    }
+    const std::uint64_t base = at >> 5, used = (c.bits + 31) / 32;
+    const std::uint32_t sh = std::uint32_t(at & 31);
+    for (std::uint64_t row = 0; row < used && row * kLaneBlock < c.words.size(); ++row)
+      for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
+        const std::uint32_t v = c.words[row * kLaneBlock + l];
+        L.words[(base + row) * kLaneBlock + l] |= v << sh;
+        if (sh) L.words[(base + row + 1) * kLaneBlock + l] |= v >> (32 - sh);
+      }
+    at += c.bits;
+  }
+  L.words.resize(rows * kLaneBlock);
+  high_writer.flush();
+  high_bytes.resize(high_bytes.size() + 8, 0);
+  L.exception_bits = std::move(high_bytes);
+  return L;
+}
+
+}  // namespace penumbra::compression::detail
