@@ -27,7 +27,10 @@ std::vector<std::shared_ptr<const EncodedPage>> pages_of_every_method() {
   const auto front = testing::relaxing_front(N, 64);
   const CodecParams plain = testing::small_plain_codebooks(), aligned = testing::small_aligned_codebooks();
   using testing::shared_page;
-  return {shared_page(noise, 37, CodecParams{}, 2e-2f * noise.range()),   // predictive, raw sections
+  CodecParams sections;
+  sections.predictive_lanes = false;
+  return {shared_page(noise, 37, sections, 2e-2f * noise.range()),       // predictive, raw sections
+          shared_page(noise, 37, CodecParams{}, 2e-2f * noise.range()),  // predictive_lanes, exceptions
           shared_page(waves, 64, plain, 0),                              // vq
           shared_page(waves, 64, plain, 1e-2f * waves.range()),          // vq_residual
           shared_page(waves, 29, plain, 2e-4f * waves.range()),          // partial window, tight bound
@@ -47,7 +50,8 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
     if (!v.empty()) v[any(v.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
   };
   BitBlocks& b = p.blocks;
-  switch (rng() % 13) {
+  LaneBlocks& l = p.lanes;
+  switch (rng() % 18) {
     case 0: scramble(p.i8); break;
     case 1: scramble(p.iw); break;
     case 2: scramble(p.ia); break;
@@ -63,6 +67,13 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
     case 9: if (!p.mean_q.empty()) p.mean_q[any(p.mean_q.size())] = static_cast<std::uint16_t>(rng()); break;
     case 10: p.codebook_size = static_cast<std::uint32_t>(rng() % 300); break;
     case 11: if (b.payload.size() > 16) b.payload.resize(b.payload.size() - 1 - any(8)); break;
+    case 12: scramble(l.widths); break;
+    case 13:
+      if (!l.exception_steps.empty()) l.exception_steps[any(l.exception_steps.size())] = static_cast<std::uint16_t>(rng() % 48);
+      break;
+    case 14: if (!l.bit_start.empty()) l.bit_start[any(l.bit_start.size())] += (rng() % 64) - 32; break;
+    case 15: if (!l.words.empty()) l.words[any(l.words.size())] ^= 1u << (rng() % 32); break;
+    case 16: if (!l.exception_lanes.empty()) l.exception_lanes[any(l.exception_lanes.size())] ^= 1u << (rng() % 16); break;
     default: if (!p.times.empty()) p.times[any(p.times.size())] = rng() % 2 ? std::nan("") : -1.0; break;
   }
 }
@@ -71,10 +82,10 @@ TEST(PageMutation, WhatValidatePageAcceptsDecodesWithinThePage) {
   const auto originals = pages_of_every_method();
   std::set<PageMethod> methods;
   for (const auto& page : originals) methods.insert(page->method);
-  ASSERT_EQ(methods.size(), 5u) << "the pages no longer cover every method";
+  ASSERT_EQ(methods.size(), 6u) << "the pages no longer cover every method";
   std::mt19937_64 rng(20261201);
   int accepted = 0, rejected = 0;
-  for (int trial = 0; trial < 400; ++trial) {
+  for (int trial = 0; trial < 480; ++trial) {
     const EncodedPage& original = *originals[static_cast<std::size_t>(trial) % originals.size()];
     auto page = std::make_shared<EncodedPage>(original);
     for (int k = 1 + static_cast<int>(rng() % 3); k > 0; --k) damage(*page, rng);

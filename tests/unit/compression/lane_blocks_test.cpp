@@ -1,0 +1,149 @@
+// tests/unit/compression/lane_blocks_test.cpp -- predictive_lanes pages: the bound at every value
+// on hard windows (one or two steps, a partial last block, exceptions, raw lanes), every decode
+// path against the window, the table checks, and the file format's version gate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "crc32_reference.h"
+#include "expect_error.h"
+#include "penumbra/compression/field_file.h"
+#include "penumbra/compression/version.h"
+#include "penumbra/compression/window_codec.h"
+#include "stream_field.h"
+#include "temp_path.h"
+#include "test_fields.h"
+
+namespace penumbra::compression {
+namespace {
+
+using testing::SyntheticField;
+using testing::temp_path;
+using testing::crc32_reference;
+
+struct VectorDecodeGuard {
+  ~VectorDecodeGuard() { set_vector_decode(true); }
+};
+
+// Window, every step, every vertex's series and a cursor's playback agree bit for bit, with
+// and without the vector decoders, and every value lies within the page's bound.
+void expect_paths_agree(const SyntheticField& f, std::uint32_t n, const EncodedPage& page, const std::string& what) {
+  VectorDecodeGuard guard;
+  const std::uint64_t N = f.vertices;
+  ASSERT_EQ(page.method, PageMethod::predictive_lanes) << what;
+  std::vector<float> window(N * n), scalar(N * n), step(N), series(n);
+  decode_window(page, window.data());
+  set_vector_decode(false);
+  decode_window(page, scalar.data());
+  set_vector_decode(true);
+  ASSERT_EQ(0, std::memcmp(window.data(), scalar.data(), window.size() * 4)) << what;
+  for (std::uint64_t i = 0; i < N * n; ++i)
+    ASSERT_LE(std::fabs(double(window[i]) - f.values[i]), page.bound) << what << ": value " << i;
+  const auto shared = std::make_shared<const EncodedPage>(page);
+  StepCursor cursor;
+  for (std::uint32_t t = 0; t < n; ++t) {
+    decode_step(page, t, step.data());
+    ASSERT_EQ(0, std::memcmp(step.data(), window.data() + std::uint64_t(t) * N, N * 4)) << what << ": step " << t;
+    cursor.decode(shared, t, step.data());
+    ASSERT_EQ(0, std::memcmp(step.data(), window.data() + std::uint64_t(t) * N, N * 4)) << what << ": cursor " << t;
+  }
+  for (std::uint64_t v = 0; v < N; v += 7) {
+    decode_vertex(page, v, series.data());
+    for (std::uint32_t t = 0; t < n; ++t) ASSERT_EQ(series[t], window[std::uint64_t(t) * N + v]) << what << ": vertex " << v;
+  }
+}
+
+TEST(LaneBlocks, EveryPathHoldsTheBoundOnHardWindows) {
+  auto noise = testing::white_noise(1003, 40);  // 62 full blocks and a last one of 11 lanes
+  testing::add_outliers(noise);
+  for (const std::uint32_t n : {1u, 2u, 3u, 21u, 40u}) {
+    const float bound = 1e-2f * noise.range();
+    const auto page = testing::encode(noise, 0, n, CodecParams{}, bound);
+    expect_paths_agree(noise, n, page, "noise, " + std::to_string(n) + " steps");
+    if (n >= 3) EXPECT_GT(page.lanes.exception_steps.size(), 0u) << "outliers should be exceptions";
+  }
+  // Fewer vertices than one block.
+  const auto few = testing::white_noise(5, 9);
+  expect_paths_agree(few, 9, testing::encode(few, 0, 9, CodecParams{}, 1e-2f * few.range()), "5 vertices");
+}
+
+TEST(LaneBlocks, ValuesTheQuantiserCannotHoldAreStoredExactly) {
+  // At a bound of 1e-8 of the range, k exceeds 2^24 and lo + float(k) step misses some values
+  // by more than the bound: those lanes are stored as exact floats.
+  auto f = testing::smooth_blobs(100, 12);
+  const float bound = 1e-8f * f.range();
+  const auto page = testing::encode(f, 0, 12, CodecParams{}, bound);
+  ASSERT_EQ(page.method, PageMethod::predictive_lanes);
+  EXPECT_GT(page.lanes.raw_values.size(), 0u);
+  expect_paths_agree(f, 12, page, "raw lanes");
+}
+
+TEST(LaneBlocks, ValidatePageFindsFaultsInTheTables) {
+  const auto f = testing::white_noise(40, 16);  // 3 blocks, the last of 8 lanes
+  const EncodedPage good = testing::encode(f, 0, 16, CodecParams{}, 1e-2f * f.range());
+  ASSERT_EQ(good.method, PageMethod::predictive_lanes);
+  EXPECT_NO_THROW(validate_page(good));
+  auto expect_invalid = [](const EncodedPage& bad, const std::string& what) {
+    testing::expect_error([&] { validate_page(bad); }, ErrorCode::invalid_argument, {what}, what);
+  };
+  EncodedPage bad = good;
+  bad.lanes.widths[4] = 33;  // block 1's later steps
+  expect_invalid(bad, "width over 32 bits at lane block 1");
+  bad = good;
+  bad.lanes.linear[2] |= 0x8000;  // lane 15 of the last block: past vertex 39
+  expect_invalid(bad, "predictor or raw flag on a padding lane at lane block 2");
+  bad = good;
+  bad.lanes.bit_start[1] += 1;
+  expect_invalid(bad, "derived lane block offsets do not match");
+  bad = good;
+  bad.lanes.words.resize(bad.lanes.words.size() - 16);
+  expect_invalid(bad, "lane words holds");
+  bad = good;
+  bad.first_width = 40;
+  expect_invalid(bad, "first-value width 40");
+  if (!good.lanes.exception_steps.empty()) {
+    bad = good;
+    bad.lanes.exception_steps[0] = 16;  // past the page's steps
+    expect_invalid(bad, "exception steps not increasing inside the window");
+  }
+}
+
+TEST(LaneBlocks, FilesRoundTripAndOlderVersionsCannotHoldThem) {
+  const auto f = testing::white_noise(300, 20);
+  CodecParams p;
+  p.window = 16;
+  p.codebook_size = 16;
+  p.bound = {BoundKind::range_relative, 1e-2};
+  const std::string path = temp_path("lanes.pnbf"), cut = temp_path("lanes_cut.pnbf");
+  testing::stream_field(f, path, p, "noise");
+  const auto field = CompressedField::open(path);
+  ASSERT_EQ(field->format_version(), std::uint32_t(kContainerFormatVersion));
+  ASSERT_EQ(field->page(0).method, PageMethod::predictive_lanes);
+  field->verify();
+  std::vector<float> step(300);
+  for (std::uint64_t t = 0; t < 20; ++t) {
+    field->read_step(t, step.data());
+    for (std::uint64_t v = 0; v < 300; ++v)
+      ASSERT_LE(std::fabs(step[v] - f.values[t * 300 + v]), 1e-2 * f.range() * (1 + 1e-6)) << t << "," << v;
+  }
+  // Every truncated prefix is rejected.
+  const auto bytes = testing::read_file(path);
+  for (std::size_t size = 0; size < bytes.size(); size += 1 + size / 64) {
+    testing::write_file(cut, bytes.data(), size);
+    EXPECT_THROW(CompressedField::open(cut)->verify(), Error) << size << " bytes";
+  }
+  // A file that says version 2 cannot hold such a page: it is corrupt, not a new page kind.
+  std::vector<char> v2 = bytes;
+  std::uint32_t header_bytes, crc, version = 2;
+  std::memcpy(&header_bytes, v2.data() + 12, 4);
+  std::memcpy(v2.data() + 8, &version, 4);
+  crc = crc32_reference(v2.data(), header_bytes - 4);
+  std::memcpy(v2.data() + header_bytes - 4, &crc, 4);
+  testing::write_file(cut, v2.data(), v2.size());
+  EXPECT_THROW(CompressedField::open(cut)->verify(), Error);
+}
+
+}  // namespace
+}  // namespace penumbra::compression
