@@ -53,6 +53,7 @@ public:
   }
   void take(void* out, std::size_t bytes) {
     if (bytes > m_size - m_pos) fail("ends early");
+    if (bytes == 0) return;  // an empty table's data() may be null, which memcpy may not take
     std::memcpy(out, m_data + m_pos, bytes);
     m_pos += bytes;
   }

@@ -8,6 +8,11 @@
 //   (version 2)            u16 ca[K x (2W - 1)], u16 level[N], u8 shift[N], u8 entry[N]
 //   *_residual, predictive: f32 step, f32 lo, u32 first width, u32 0, u64 group offsets
 //                          [groups + 1], 4-bit codes [N], bit payload (vertex_section.h)
+//   predictive_lanes:      f32 step, f32 lo, u32 first width, u32 0, then per block of 16
+//   (version 3)            vertices (B of them): u8 widths[3 B], u16 linear[B], u16 raw[B],
+//                          u16 exception rows[B]; per exception row (R): u16 step[R],
+//                          u16 lanes[R]; high parts (bits); f32 raw values; u32 words
+//                          (lane_blocks.h; each table's size follows from those before it)
 #pragma once
 #include <cstdint>
 #include <string>
