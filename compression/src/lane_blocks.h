@@ -71,6 +71,9 @@ void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockStat
 /// decode_window for blocks [b, e) into window[t * vertex_count + v].
 void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window);
 
+/// The next step of blocks [b, e) from their states (states[k] for block k), into out[v].
+void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out);
+
 /// Step t of blocks [b, e) from each block's start: O(t). Leaves each block's state after step
 /// t in states[block - b] when given (a cursor starting at t).
 void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,

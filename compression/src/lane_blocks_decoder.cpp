@@ -46,13 +46,21 @@ void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) {
   ++s.t;
 }
 
-void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockState& s, float* row) {
+namespace {
+
+// Step t of block b's raw lanes into row[lane].
+void write_raw_step(const EncodedPage& p, std::uint64_t b, std::uint32_t t, float* row) {
   const LaneBlocks& L = p.lanes;
+  const float* raw = L.raw_values.data() + L.raw_start[b];
+  for (std::uint32_t m = L.raw[b]; m; m &= m - 1, raw += p.step_count) row[std::countr_zero(m)] = raw[t];
+}
+
+}  // namespace
+
+void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockState& s, float* row) {
   const std::uint64_t lanes = std::min<std::uint64_t>(kLaneBlock, p.vertex_count - b * kLaneBlock);
   for (std::uint64_t l = 0; l < lanes; ++l) row[l] = p.lo + float(std::int32_t(s.k1[l])) * p.step;
-  const std::uint32_t t = s.t - 1, n = p.step_count;
-  const float* raw = L.raw_values.data() + L.raw_start[b];
-  for (std::uint32_t m = L.raw[b]; m; m &= m - 1, raw += n) row[std::countr_zero(m)] = raw[t];
+  write_raw_step(p, b, s.t - 1, row);
 }
 
 namespace {
@@ -95,8 +103,42 @@ bool avx512_active() {
 // A target region rather than an attribute, so that the lambdas inside are compiled for it too.
 #pragma GCC push_options
 #pragma GCC target("avx512f")
-// Four blocks side by side, so that their prediction chains overlap. Each step of a block is two
-// row loads, a shift of each and a mask; an exception row adds its high parts, expanded into their
+// `width` bits of every lane at bit `pos` of its column, moving pos on: the two rows the slots
+// lie in, shifted together and masked.
+inline __m512i slots512(const std::uint32_t* words, std::uint64_t& pos, std::uint32_t width) {
+  const std::uint32_t* r = words + (pos >> 5) * kLaneBlock;
+  const std::uint32_t sh = std::uint32_t(pos & 31);
+  pos += width;
+  const __m512i u = _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(sh))),
+                                    _mm512_sll_epi32(_mm512_loadu_si512(r + kLaneBlock), _mm_cvtsi32_si128(int(32 - sh))));
+  return _mm512_and_si512(u, _mm512_set1_epi32(int(low_mask(width))));
+}
+
+// Adds exception row `row`'s high parts to its lanes of u, moving row and high on.
+inline __m512i patch512(const LaneBlocks& L, std::uint32_t& row, std::uint32_t& high, std::uint32_t width, __m512i u) {
+  const __mmask16 lanes = L.exception_lanes[row++];
+  const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, L.highs.data() + high);
+  high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
+  return _mm512_add_epi32(u, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
+}
+
+// k_t from the slots u (offset by `bias`) and the two steps before.
+inline __m512i next_k512(__m512i u, __m512i bias, __mmask16 linear, __m512i k1, __m512i k2) {
+  const __m512i prediction = _mm512_mask_add_epi32(k1, linear, k1, _mm512_sub_epi32(k1, k2));
+  return _mm512_add_epi32(prediction, _mm512_sub_epi32(u, bias));
+}
+
+inline __m512 values512(const EncodedPage& p, __m512i k) {
+  return _mm512_add_ps(_mm512_set1_ps(p.lo), _mm512_mul_ps(_mm512_cvtepi32_ps(k), _mm512_set1_ps(p.step)));
+}
+
+inline __mmask16 real_lanes(const EncodedPage& p, std::uint64_t block) {
+  const std::uint64_t N = p.vertex_count, lanes = std::min<std::uint64_t>(kLaneBlock, N - block * kLaneBlock);
+  return __mmask16(lanes == kLaneBlock ? 0xFFFF : (1u << lanes) - 1);
+}
+
+// Four blocks side by side, so that their prediction chains overlap, each step of each two row
+// loads, two shifts, an or and a mask; an exception row adds its high parts, expanded into their
 // lanes. Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add
 // that are never fused.
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
@@ -105,81 +147,74 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
   const std::uint32_t* words = L.words.data();
-  const std::uint32_t* highs = L.highs.data();
-  const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
-  const std::uint64_t tail = N - (lane_block_count(N) - 1) * kLaneBlock;
-  const __mmask16 last_lanes = __mmask16(tail == kLaneBlock ? 0xFFFF : (1u << tail) - 1);
+  const __m512i zero = _mm512_setzero_si512();
   for (std::uint64_t b0 = b; b0 < e; b0 += kBlocks) {
     // A short group repeats its last block in the spare slots and stores none of them.
     __m512i k1[kBlocks], k2[kBlocks];
     __mmask16 linear[kBlocks], store[kBlocks];
     std::uint64_t pos[kBlocks];
-    std::uint32_t w1[kBlocks], w[kBlocks], row[kBlocks], row_end[kBlocks], next[kBlocks], high[kBlocks];
+    std::uint32_t w1[kBlocks], w[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks];
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
       const std::uint64_t k = std::min(b0 + j, e - 1);
-      store[j] = b0 + j >= e ? 0 : k + 1 == lane_block_count(N) ? last_lanes : 0xFFFF;
+      store[j] = b0 + j >= e ? 0 : real_lanes(p, k);
       linear[j] = L.linear[k];
       pos[j] = L.bit_start[k];
       w1[j] = lane_width_1(L, k);
       w[j] = lane_width(L, k);
       row[j] = L.row_start[k];
       row_end[j] = L.row_start[k + 1];
-      next[j] = row[j] < row_end[j] ? L.exception_steps[row[j]] : 0;
       high[j] = L.high_start[k];
     }
-    // One step of block j at `width` bits: the two rows its slots lie in, shifted together.
-    const auto slots = [&](std::uint64_t j, std::uint32_t width) {
-      const std::uint32_t* r = words + (pos[j] >> 5) * kLaneBlock;
-      const std::uint32_t sh = std::uint32_t(pos[j] & 31);
-      pos[j] += width;
-      return _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(sh))),
-                             _mm512_sll_epi32(_mm512_loadu_si512(r + kLaneBlock), _mm_cvtsi32_si128(int(32 - sh))));
-    };
-    // Adds the high parts of block j's exception row at step t, if it has one.
-    const auto patch = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width, __m512i u) {
-      if (next[j] != t) return u;
-      const __mmask16 lanes = L.exception_lanes[row[j]];
-      const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high[j]);
-      high[j] += std::uint32_t(std::popcount(std::uint32_t(lanes)));
-      ++row[j];
-      next[j] = row[j] < row_end[j] ? L.exception_steps[row[j]] : 0;
-      return _mm512_add_epi32(u, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
-    };
-    const auto put = [&](float* out, std::uint64_t j) {
-      _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k1[j]), step)));
+    // Block j's slots at step t, with its exception row's high parts if it has one there.
+    const auto step_slots = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width) {
+      const __m512i u = slots512(words, pos[j], width);
+      return row[j] < row_end[j] && L.exception_steps[row[j]] == t ? patch512(L, row[j], high[j], width, u) : u;
     };
     float* out = window + b0 * kLaneBlock;
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      k1[j] = k2[j] = _mm512_and_si512(slots(j, fw), _mm512_set1_epi32(int(low_mask(fw))));
-      put(out, j);
+      k1[j] = k2[j] = slots512(words, pos[j], fw);
+      _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k1[j]));
     }
     if (n >= 2) {
       out += N;
       for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        __m512i u = _mm512_and_si512(slots(j, w1[j]), _mm512_set1_epi32(int(low_mask(w1[j]))));
-        u = patch(j, 1, w1[j], u);
-        k1[j] = _mm512_add_epi32(k1[j], _mm512_sub_epi32(u, _mm512_set1_epi32(int(offset_bias(w1[j])))));
-        put(out, j);
+        const __m512i bias = _mm512_set1_epi32(int(offset_bias(w1[j])));
+        k1[j] = next_k512(step_slots(j, 1, w1[j]), bias, 0, k1[j], zero);
+        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k1[j]));
       }
     }
-    __m512i mask[kBlocks], bias[kBlocks];
-    for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      mask[j] = _mm512_set1_epi32(int(low_mask(w[j])));
-      bias[j] = _mm512_set1_epi32(int(offset_bias(w[j])));
-    }
+    __m512i bias[kBlocks];
+    for (std::uint64_t j = 0; j < kBlocks; ++j) bias[j] = _mm512_set1_epi32(int(offset_bias(w[j])));
     for (std::uint32_t t = 2; t < n; ++t) {
       out += N;
       for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        __m512i u = _mm512_and_si512(slots(j, w[j]), mask[j]);
-        u = patch(j, t, w[j], u);
-        const __m512i prediction = _mm512_mask_add_epi32(k1[j], linear[j], k1[j], _mm512_sub_epi32(k1[j], k2[j]));
+        const __m512i k = next_k512(step_slots(j, t, w[j]), bias[j], linear[j], k1[j], k2[j]);
         k2[j] = k1[j];
-        k1[j] = _mm512_add_epi32(prediction, _mm512_sub_epi32(u, bias[j]));
-        put(out, j);
+        k1[j] = k;
+        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k));
       }
     }
   }
   write_raw_lanes(p, b, e, window);
+}
+
+// One step of blocks [b, e) from their states (all at the same step, after step 0).
+void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
+  const LaneBlocks& L = p.lanes;
+  const std::uint32_t* words = L.words.data();
+  for (std::uint64_t k = b; k < e; ++k) {
+    LaneBlockState& s = states[k];
+    const std::uint32_t t = s.t, width = t == 1 ? lane_width_1(L, k) : lane_width(L, k);
+    __m512i u = slots512(words, s.pos, width);
+    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t) u = patch512(L, s.row, s.high, width, u);
+    const __m512i k1 = _mm512_loadu_si512(s.k1), k2 = _mm512_loadu_si512(s.k2);
+    const __m512i next = next_k512(u, _mm512_set1_epi32(int(offset_bias(width))), t >= 2 ? L.linear[k] : 0, k1, k2);
+    _mm512_storeu_si512(s.k2, k1);
+    _mm512_storeu_si512(s.k1, next);
+    ++s.t;
+    _mm512_mask_storeu_ps(out + k * kLaneBlock, real_lanes(p, k), values512(p, next));
+    if (L.raw[k]) write_raw_step(p, k, t, out + k * kLaneBlock);
+  }
 }
 #pragma GCC pop_options
 #pragma GCC diagnostic pop
@@ -192,6 +227,17 @@ void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, 
     avx512_window(p, b, e, window);
   else
     scalar_window(p, b, e, window);
+}
+
+void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
+  if (b < e && states[b].t > 0 && avx512_active()) {
+    avx512_next(p, b, e, states, out);
+    return;
+  }
+  for (std::uint64_t k = b; k < e; ++k) {
+    lane_block_step(p, k, states[k]);
+    lane_block_write(p, k, states[k], out + k * kLaneBlock);
+  }
 }
 
 void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,

@@ -142,12 +142,8 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
       });
       return;
     }
-    parallel_for(B, kChunk / detail::kLaneBlock, [&](std::size_t b, std::size_t e) {
-      for (std::size_t k = b; k < e; ++k) {
-        detail::lane_block_step(p, k, blocks[k]);
-        detail::lane_block_write(p, k, blocks[k], out + k * detail::kLaneBlock);
-      }
-    });
+    parallel_for(B, kChunk / detail::kLaneBlock,
+                 [&](std::size_t b, std::size_t e) { detail::lane_blocks_next(p, b, e, blocks.data(), out); });
     return;
   }
   if (!follows) {
