@@ -114,10 +114,13 @@ inline __m512i slots512(const std::uint32_t* words, std::uint64_t& pos, std::uin
   return _mm512_and_si512(u, _mm512_set1_epi32(int(low_mask(width))));
 }
 
-// Adds exception row `row`'s high parts to its lanes of u, moving row and high on.
-inline __m512i patch512(const LaneBlocks& L, std::uint32_t& row, std::uint32_t& high, std::uint32_t width, __m512i u) {
-  const __mmask16 lanes = L.exception_lanes[row++];
-  const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, L.highs.data() + high);
+// Adds exception row `row`'s high parts to its lanes of u, moving row and high on. (Plain
+// pointers rather than the page's vectors: after a vector store, which may alias anything, a
+// vector's data pointer would be loaded again.)
+inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint32_t& row,
+                        std::uint32_t& high, std::uint32_t width, __m512i u) {
+  const __mmask16 lanes = exception_lanes[row++];
+  const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high);
   high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
   return _mm512_add_epi32(u, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
 }
@@ -128,8 +131,8 @@ inline __m512i next_k512(__m512i u, __m512i bias, __mmask16 linear, __m512i k1, 
   return _mm512_add_epi32(prediction, _mm512_sub_epi32(u, bias));
 }
 
-inline __m512 values512(const EncodedPage& p, __m512i k) {
-  return _mm512_add_ps(_mm512_set1_ps(p.lo), _mm512_mul_ps(_mm512_cvtepi32_ps(k), _mm512_set1_ps(p.step)));
+inline __m512 values512(__m512 lo, __m512 step, __m512i k) {
+  return _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k), step));
 }
 
 inline __mmask16 real_lanes(const EncodedPage& p, std::uint64_t block) {
@@ -147,13 +150,19 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
   const std::uint32_t* words = L.words.data();
-  const __m512i zero = _mm512_setzero_si512();
+  const std::uint16_t *exception_steps = L.exception_steps.data(), *exception_lanes = L.exception_lanes.data();
+  const std::uint32_t* highs = L.highs.data();
+  const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t b0 = b; b0 < e; b0 += kBlocks) {
-    // A short group repeats its last block in the spare slots and stores none of them.
-    __m512i k1[kBlocks], k2[kBlocks];
+    // A short group repeats its last block in the spare slots and stores none of them. Each block
+    // keeps k and its last difference d = k_t - k_{t-1}: the extrapolating lanes' next difference
+    // is d plus the slot's, the others' the slot's alone (one masked add instead of a subtraction
+    // and a masked add), and the same integers as k_{t-1} + prediction error.
+    __m512i k[kBlocks], d[kBlocks];
     __mmask16 linear[kBlocks], store[kBlocks];
     std::uint64_t pos[kBlocks];
-    std::uint32_t w1[kBlocks], w[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks];
+    // next: the step of the block's next exception row (0: none left).
+    std::uint32_t w1[kBlocks], w[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks], next[kBlocks];
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
       const std::uint64_t k = std::min(b0 + j, e - 1);
       store[j] = b0 + j >= e ? 0 : real_lanes(p, k);
@@ -164,23 +173,27 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       row[j] = L.row_start[k];
       row_end[j] = L.row_start[k + 1];
       high[j] = L.high_start[k];
+      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
     }
     // Block j's slots at step t, with its exception row's high parts if it has one there.
     const auto step_slots = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width) {
       const __m512i u = slots512(words, pos[j], width);
-      return row[j] < row_end[j] && L.exception_steps[row[j]] == t ? patch512(L, row[j], high[j], width, u) : u;
+      if (next[j] != t) return u;
+      const __m512i patched = patch512(exception_lanes, highs, row[j], high[j], width, u);
+      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+      return patched;
     };
     float* out = window + b0 * kLaneBlock;
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      k1[j] = k2[j] = slots512(words, pos[j], fw);
-      _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k1[j]));
+      k[j] = slots512(words, pos[j], fw);
+      _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
     }
     if (n >= 2) {
       out += N;
       for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        const __m512i bias = _mm512_set1_epi32(int(offset_bias(w1[j])));
-        k1[j] = next_k512(step_slots(j, 1, w1[j]), bias, 0, k1[j], zero);
-        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k1[j]));
+        d[j] = _mm512_sub_epi32(step_slots(j, 1, w1[j]), _mm512_set1_epi32(int(offset_bias(w1[j]))));
+        k[j] = _mm512_add_epi32(k[j], d[j]);
+        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
       }
     }
     __m512i bias[kBlocks];
@@ -188,10 +201,10 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     for (std::uint32_t t = 2; t < n; ++t) {
       out += N;
       for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        const __m512i k = next_k512(step_slots(j, t, w[j]), bias[j], linear[j], k1[j], k2[j]);
-        k2[j] = k1[j];
-        k1[j] = k;
-        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(p, k));
+        const __m512i error = _mm512_sub_epi32(step_slots(j, t, w[j]), bias[j]);
+        d[j] = _mm512_mask_add_epi32(error, linear[j], error, d[j]);
+        k[j] = _mm512_add_epi32(k[j], d[j]);
+        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
       }
     }
   }
@@ -202,17 +215,19 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
 void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
   const std::uint32_t* words = L.words.data();
+  const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = t == 1 ? lane_width_1(L, k) : lane_width(L, k);
     __m512i u = slots512(words, s.pos, width);
-    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t) u = patch512(L, s.row, s.high, width, u);
+    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t)
+      u = patch512(L.exception_lanes.data(), L.highs.data(), s.row, s.high, width, u);
     const __m512i k1 = _mm512_loadu_si512(s.k1), k2 = _mm512_loadu_si512(s.k2);
     const __m512i next = next_k512(u, _mm512_set1_epi32(int(offset_bias(width))), t >= 2 ? L.linear[k] : 0, k1, k2);
     _mm512_storeu_si512(s.k2, k1);
     _mm512_storeu_si512(s.k1, next);
     ++s.t;
-    _mm512_mask_storeu_ps(out + k * kLaneBlock, real_lanes(p, k), values512(p, next));
+    _mm512_mask_storeu_ps(out + k * kLaneBlock, real_lanes(p, k), values512(lo, step, next));
     if (L.raw[k]) write_raw_step(p, k, t, out + k * kLaneBlock);
   }
 }
