@@ -24,7 +24,7 @@ std::uint64_t EncodedPage::resident_bytes() const {
          (lanes.linear.size() + lanes.raw.size() + lanes.exception_rows.size() + lanes.exception_steps.size() +
           lanes.exception_lanes.size()) * 2 +
          lanes.exception_bits.size() + (lanes.raw_values.size() + lanes.words.size() + lanes.highs.size()) * 4 +
-         (lanes.bit_start.size() + lanes.raw_start.size()) * 8 + (lanes.row_start.size() + lanes.high_start.size()) * 4;
+         (lanes.bit_start.size() + lanes.raw_start.size() + lanes.row_start.size() + lanes.high_start.size()) * 8;
 }
 
 }  // namespace penumbra::compression

@@ -56,7 +56,7 @@ struct LaneBlockState {
   std::uint32_t k1[kLaneBlock], k2[kLaneBlock];
   std::uint32_t t = 0;
   std::uint64_t pos = 0;
-  std::uint32_t row = 0, high = 0;
+  std::uint64_t row = 0, high = 0;
 };
 
 /// Points `s` at step 0 of block b.

@@ -33,8 +33,8 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   for (std::uint64_t b = 0; b < B; ++b) {
     d.bit_start[b] = bits;
     d.raw_start[b] = raw;
-    d.row_start[b] = std::uint32_t(rows);
-    d.high_start[b] = std::uint32_t(highs);
+    d.row_start[b] = rows;
+    d.high_start[b] = highs;
     const std::uint32_t w1 = lane_width_1(L, b), w = lane_width(L, b), x = lane_exception_width(L, b);
     if (w1 > 32 || w > 32 || x > 32) return at_block("width over 32 bits", b);
     if ((n < 2 && w1 != 0) || (n < 3 && w != 0)) return at_block("width for a step the page does not have", b);
@@ -55,12 +55,11 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
       high_bits += std::uint64_t(std::popcount(lanes)) * x;
     }
     rows = row_end;
-    if (rows >= (1ull << 32) || highs >= (1ull << 32)) return "too many exceptions for one page";
   }
   d.bit_start[B] = bits;
   d.raw_start[B] = raw;
-  d.row_start[B] = std::uint32_t(rows);
-  d.high_start[B] = std::uint32_t(highs);
+  d.row_start[B] = rows;
+  d.high_start[B] = highs;
   if (L.exception_steps.size() != rows || L.exception_lanes.size() != rows) return "exception row tables have the wrong size";
   if (L.exception_bits.size() != (high_bits + 7) / 8 + 8) return "exception high parts have the wrong size";
   if (L.raw_values.size() != raw) return "raw lane values have the wrong size";
@@ -70,7 +69,7 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   std::uint64_t at = 0;
   for (std::uint64_t b = 0; b < B; ++b) {
     const std::uint32_t x = lane_exception_width(L, b);
-    for (std::uint32_t h = d.high_start[b]; h < d.high_start[b + 1]; ++h, at += x)
+    for (std::uint64_t h = d.high_start[b]; h < d.high_start[b + 1]; ++h, at += x)
       d.highs[h] = std::uint32_t(unzigzag(read_bits(L.exception_bits.data(), at, x)));
   }
   if (derive) {

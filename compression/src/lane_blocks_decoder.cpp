@@ -117,8 +117,8 @@ inline __m512i slots512(const std::uint32_t* words, std::uint64_t& pos, std::uin
 // Adds exception row `row`'s high parts to its lanes of u, moving row and high on. (Plain
 // pointers rather than the page's vectors: after a vector store, which may alias anything, a
 // vector's data pointer would be loaded again.)
-inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint32_t& row,
-                        std::uint32_t& high, std::uint32_t width, __m512i u) {
+inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint64_t& row,
+                        std::uint64_t& high, std::uint32_t width, __m512i u) {
   const __mmask16 lanes = exception_lanes[row++];
   const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high);
   high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
@@ -162,7 +162,8 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     __mmask16 linear[kBlocks], store[kBlocks];
     std::uint64_t pos[kBlocks];
     // next: the step of the block's next exception row (0: none left).
-    std::uint32_t w1[kBlocks], w[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks], next[kBlocks];
+    std::uint64_t row[kBlocks], row_end[kBlocks], high[kBlocks];
+    std::uint32_t w1[kBlocks], w[kBlocks], next[kBlocks];
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
       const std::uint64_t k = std::min(b0 + j, e - 1);
       store[j] = b0 + j >= e ? 0 : real_lanes(p, k);

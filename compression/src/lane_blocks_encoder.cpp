@@ -45,16 +45,25 @@ private:
   Chunk& m_c;
 };
 
-// Encodes one block of `lanes` vertices (x: their windows, `window` floats apart) into c.
-void encode_block(const float* x, std::uint64_t lanes, std::uint32_t n, std::uint32_t window, float lo, float step,
-                  float bound, std::uint32_t fw, Chunk& c, ChunkWriter& out, std::vector<std::int32_t>& d) {
-  // k per lane and step; raw lanes and padding read 0 everywhere.
-  std::uint32_t k[kLaneBlock][2] = {};
+// The page's quantiser (k = round((x - lo) / step), held within `bound`) and shape.
+struct Quantiser {
+  std::uint32_t steps, window, first_width;
+  float lo, step, bound;
+};
+
+// Encodes one block of `lanes` vertices (x: their windows, q.window floats apart) into c.
+void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk& c, ChunkWriter& out,
+                  std::vector<std::int32_t>& d, std::vector<std::uint32_t>& kk) {
+  const std::uint32_t n = q.steps, fw = q.first_width;
+  const float lo = q.lo, step = q.step, bound = q.bound;
+  // k_0 per lane and each step's difference from its prediction, d[l * n + t]; raw lanes and
+  // padding read 0 everywhere.
+  std::uint32_t k0[kLaneBlock] = {};
   std::uint16_t raw = 0, linear = 0;
-  d.assign(kLaneBlock * std::size_t(n), 0);  // d[l * n + t]: step t's difference from its prediction
-  std::vector<std::uint32_t> kk(n);
+  d.assign(kLaneBlock * std::size_t(n), 0);
+  kk.resize(n);
   for (std::uint64_t l = 0; l < lanes; ++l) {
-    const float* xl = x + l * window;
+    const float* xl = x + l * q.window;
     bool fits = true;
     for (std::uint32_t t = 0; t < n && fits; ++t) {
       const double kd = std::nearbyint((double(xl[t]) - lo) / step);
@@ -67,7 +76,7 @@ void encode_block(const float* x, std::uint64_t lanes, std::uint32_t n, std::uin
       c.raw_values.insert(c.raw_values.end(), xl, xl + n);
       continue;
     }
-    k[l][0] = kk[0];
+    k0[l] = kk[0];
     // Whichever predictor needs fewer bits over steps 2.. (step 1 predicts k_0 either way).
     std::uint64_t cost[2] = {0, 0};
     for (std::uint32_t t = 2; t < n; ++t) {
@@ -108,7 +117,7 @@ void encode_block(const float* x, std::uint64_t lanes, std::uint32_t n, std::uin
   if (n < 3) w = 0;
   // Slots, exception rows and high parts.
   std::uint64_t pos = c.bits;
-  for (std::uint64_t l = 0; l < kLaneBlock; ++l) out.put(std::uint32_t(l), pos, fw, k[l][0]);
+  for (std::uint64_t l = 0; l < kLaneBlock; ++l) out.put(std::uint32_t(l), pos, fw, k0[l]);
   pos += fw;
   std::uint32_t high_width = 0;
   const std::size_t rows_before = c.exception_steps.size();
@@ -146,10 +155,12 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
                              float bound, std::uint32_t first_width,
                              const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather) {
   const std::uint64_t B = lane_block_count(N), chunks = (B + kChunkBlocks - 1) / kChunkBlocks;
+  const Quantiser q{steps, window, first_width, lo, step, bound};
   std::vector<Chunk> done(chunks);
   parallel_for(chunks, 1, [&](std::size_t c0, std::size_t c1) {
     thread_local std::vector<float> x;
     thread_local std::vector<std::int32_t> d;
+    thread_local std::vector<std::uint32_t> k;
     for (std::size_t c = c0; c < c1; ++c) {
       Chunk& chunk = done[c];
       ChunkWriter writer(chunk);
@@ -157,8 +168,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
       x.resize(count * window);
       gather(first, count, x.data());
       for (std::uint64_t v = 0; v < count; v += kLaneBlock)
-        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), steps, window, lo, step,
-                     bound, first_width, chunk, writer, d);
+        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), q, chunk, writer, d, k);
     }
   });
   // Join: tables concatenated, each chunk's columns ORed in at its bit offset, high parts packed.

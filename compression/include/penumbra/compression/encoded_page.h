@@ -50,8 +50,7 @@ struct LaneBlocks {
   /// Derived when a page is built or parsed, not stored: where each block starts (its bit in
   /// every lane's column, its first exception row, high part and raw value), plus the end, and
   /// the high parts unpacked to 32 bits.
-  std::vector<std::uint64_t> bit_start, raw_start;
-  std::vector<std::uint32_t> row_start, high_start;
+  std::vector<std::uint64_t> bit_start, raw_start, row_start, high_start;
   std::vector<std::uint32_t> highs;
 
   std::uint64_t block_count() const { return linear.size(); }
