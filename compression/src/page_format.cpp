@@ -19,14 +19,26 @@ namespace {
 bool has_vq(PageMethod m) { return uses_plain_vq(m); }
 bool has_blocks(PageMethod m) { return has_bit_blocks(m); }
 
-// The tables of a predictive_lanes page in their stored order; each variable-length table's
-// size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
-void read_lane_blocks(ByteReader& r, EncodedPage& p) {
-  LaneBlocks& L = p.lanes;
+// The quantiser of a page with bit blocks or lane blocks: step, lo, first width and a reserved 0.
+void put_quantiser(ByteWriter& w, const EncodedPage& p) {
+  w.put(p.step);
+  w.put(p.lo);
+  w.put(p.first_width);
+  w.put(std::uint32_t(0));
+}
+
+void get_quantiser(ByteReader& r, EncodedPage& p) {
   p.step = r.get<float>();
   p.lo = r.get<float>();
   p.first_width = r.get<std::uint32_t>();
   r.get<std::uint32_t>();
+}
+
+// The tables of a predictive_lanes page in their stored order; each variable-length table's
+// size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
+void read_lane_blocks(ByteReader& r, EncodedPage& p) {
+  LaneBlocks& L = p.lanes;
+  get_quantiser(r, p);
   if (p.first_width < 1 || p.first_width > 31) r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
   const std::uint64_t B = lane_block_count(p.vertex_count);
   r.get_array(L.widths, 3 * B);
@@ -80,20 +92,14 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.put_array(p.ia);
   }
   if (has_blocks(p.method)) {
-    w.put(p.step);
-    w.put(p.lo);
-    w.put(p.first_width);
-    w.put(std::uint32_t(0));
+    put_quantiser(w, p);
     w.put_array(p.blocks.group_offsets);
     w.put_array(p.blocks.widths);
     w.append(p.blocks.payload.data(), p.blocks.group_offsets.back());  // without the read padding
   }
   if (p.method == PageMethod::predictive_lanes) {
     const LaneBlocks& L = p.lanes;
-    w.put(p.step);
-    w.put(p.lo);
-    w.put(p.first_width);
-    w.put(std::uint32_t(0));
+    put_quantiser(w, p);
     w.put_array(L.widths);
     w.put_array(L.linear);
     w.put_array(L.raw);
@@ -188,10 +194,7 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     r.get_array(p.ia, N);
   }
   if (has_blocks(p.method)) {
-    p.step = r.get<float>();
-    p.lo = r.get<float>();
-    p.first_width = r.get<std::uint32_t>();
-    r.get<std::uint32_t>();
+    get_quantiser(r, p);
     const std::uint64_t groups = (N + BitBlocks::kGroupSize - 1) / BitBlocks::kGroupSize;
     r.get_array(p.blocks.group_offsets, groups + 1);
     r.get_array(p.blocks.widths, (N + 1) / 2);
