@@ -59,6 +59,16 @@ struct LaneBlockState {
   std::uint64_t row = 0, high = 0;
 };
 
+/// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
+/// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
+enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2 };
+LaneIsa lane_isa();
+void cap_lane_isa(LaneIsa widest);
+
+/// The AVX2 window and cursor decoders (lane_blocks_avx2.cpp); raw lanes are left to the caller.
+void lane_blocks_window_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window);
+void lane_blocks_next_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out);
+
 /// Points `s` at step 0 of block b.
 void lane_block_begin(const EncodedPage& p, std::uint64_t b, LaneBlockState& s);
 

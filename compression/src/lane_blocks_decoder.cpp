@@ -1,8 +1,10 @@
 // compression/src/lane_blocks_decoder.cpp -- decoders of predictive_lanes pages: a scalar one
-// that every path can use, and an AVX-512 whole-window decoder that is bit-identical to it.
+// that every path can use, and AVX-512 window and cursor decoders that are bit-identical to it
+// (the AVX2 ones are in lane_blocks_avx2.cpp).
 #include <immintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 
 #include "lane_blocks.h"
@@ -91,10 +93,7 @@ void scalar_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
   }
 }
 
-bool avx512_active() {
-  static const bool cpu = __builtin_cpu_supports("avx512f");
-  return cpu && lanes_active();
-}
+std::atomic<int> g_lane_isa_cap{int(LaneIsa::avx512)};
 
 // GCC 12 warns that the AVX-512 intrinsics' own undefined-vector placeholders may be used
 // uninitialised (a false positive inside immintrin.h).
@@ -209,7 +208,6 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       }
     }
   }
-  write_raw_lanes(p, b, e, window);
 }
 
 // One step of blocks [b, e) from their states (all at the same step, after step 0).
@@ -229,7 +227,6 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
     _mm512_storeu_si512(s.k1, next);
     ++s.t;
     _mm512_mask_storeu_ps(out + k * kLaneBlock, real_lanes(p, k), values512(lo, step, next));
-    if (L.raw[k]) write_raw_step(p, k, t, out + k * kLaneBlock);
   }
 }
 #pragma GCC pop_options
@@ -237,23 +234,41 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
 
 }  // namespace
 
+LaneIsa lane_isa() {
+  static const LaneIsa cpu = __builtin_cpu_supports("avx512f") ? LaneIsa::avx512
+                             : __builtin_cpu_supports("avx2")  ? LaneIsa::avx2
+                                                               : LaneIsa::scalar;
+  if (!lanes_active()) return LaneIsa::scalar;
+  return LaneIsa(std::min(int(cpu), g_lane_isa_cap.load(std::memory_order_relaxed)));
+}
+
+void cap_lane_isa(LaneIsa widest) { g_lane_isa_cap.store(int(widest), std::memory_order_relaxed); }
+
 void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   if (b >= e) return;
-  if (avx512_active())
-    avx512_window(p, b, e, window);
-  else
-    scalar_window(p, b, e, window);
+  switch (lane_isa()) {
+    case LaneIsa::avx512: avx512_window(p, b, e, window); break;
+    case LaneIsa::avx2: lane_blocks_window_avx2(p, b, e, window); break;
+    case LaneIsa::scalar: scalar_window(p, b, e, window); return;  // raw lanes included
+  }
+  write_raw_lanes(p, b, e, window);
 }
 
 void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
-  if (b < e && states[b].t > 0 && avx512_active()) {
-    avx512_next(p, b, e, states, out);
+  const LaneIsa isa = b < e && states[b].t > 0 ? lane_isa() : LaneIsa::scalar;
+  if (isa == LaneIsa::scalar) {
+    for (std::uint64_t k = b; k < e; ++k) {
+      lane_block_step(p, k, states[k]);
+      lane_block_write(p, k, states[k], out + k * kLaneBlock);
+    }
     return;
   }
-  for (std::uint64_t k = b; k < e; ++k) {
-    lane_block_step(p, k, states[k]);
-    lane_block_write(p, k, states[k], out + k * kLaneBlock);
-  }
+  if (isa == LaneIsa::avx512)
+    avx512_next(p, b, e, states, out);
+  else
+    lane_blocks_next_avx2(p, b, e, states, out);
+  for (std::uint64_t k = b; k < e; ++k)
+    if (p.lanes.raw[k]) write_raw_step(p, k, states[k].t - 1, out + k * kLaneBlock);
 }
 
 void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "crc32_reference.h"
+#include "lane_blocks.h"
 #include "expect_error.h"
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/version.h"
@@ -23,35 +24,44 @@ using testing::SyntheticField;
 using testing::temp_path;
 using testing::crc32_reference;
 
+// Restores the defaults (vector decoders on, the widest the CPU has) whatever a test does.
 struct VectorDecodeGuard {
-  ~VectorDecodeGuard() { set_vector_decode(true); }
+  ~VectorDecodeGuard() {
+    set_vector_decode(true);
+    detail::cap_lane_isa(detail::LaneIsa::avx512);
+  }
 };
 
-// Window, every step, every vertex's series and a cursor's playback agree bit for bit, with
-// and without the vector decoders, and every value lies within the page's bound.
+// Window, every step, every vertex's series and a cursor's playback agree bit for bit with the
+// scalar decoders, for each vector decoder this CPU has (AVX-512, AVX2), and every value lies
+// within the page's bound.
 void expect_paths_agree(const SyntheticField& f, std::uint32_t n, const EncodedPage& page, const std::string& what) {
   VectorDecodeGuard guard;
   const std::uint64_t N = f.vertices;
   ASSERT_EQ(page.method, PageMethod::predictive_lanes) << what;
   std::vector<float> window(N * n), scalar(N * n), step(N), series(n);
-  decode_window(page, window.data());
   set_vector_decode(false);
   decode_window(page, scalar.data());
   set_vector_decode(true);
-  ASSERT_EQ(0, std::memcmp(window.data(), scalar.data(), window.size() * 4)) << what;
   for (std::uint64_t i = 0; i < N * n; ++i)
-    ASSERT_LE(std::fabs(double(window[i]) - f.values[i]), page.bound) << what << ": value " << i;
-  const auto shared = std::make_shared<const EncodedPage>(page);
-  StepCursor cursor;
-  for (std::uint32_t t = 0; t < n; ++t) {
-    decode_step(page, t, step.data());
-    ASSERT_EQ(0, std::memcmp(step.data(), window.data() + std::uint64_t(t) * N, N * 4)) << what << ": step " << t;
-    cursor.decode(shared, t, step.data());
-    ASSERT_EQ(0, std::memcmp(step.data(), window.data() + std::uint64_t(t) * N, N * 4)) << what << ": cursor " << t;
+    ASSERT_LE(std::fabs(double(scalar[i]) - f.values[i]), page.bound) << what << ": value " << i;
+  for (const auto isa : {detail::LaneIsa::avx512, detail::LaneIsa::avx2, detail::LaneIsa::scalar}) {
+    detail::cap_lane_isa(isa);
+    const std::string with = what + ", decoders up to " + std::to_string(int(isa));
+    decode_window(page, window.data());
+    ASSERT_EQ(0, std::memcmp(window.data(), scalar.data(), window.size() * 4)) << with;
+    const auto shared = std::make_shared<const EncodedPage>(page);
+    StepCursor cursor;
+    for (std::uint32_t t = 0; t < n; ++t) {
+      decode_step(page, t, step.data());
+      ASSERT_EQ(0, std::memcmp(step.data(), scalar.data() + std::uint64_t(t) * N, N * 4)) << with << ": step " << t;
+      cursor.decode(shared, t, step.data());
+      ASSERT_EQ(0, std::memcmp(step.data(), scalar.data() + std::uint64_t(t) * N, N * 4)) << with << ": cursor " << t;
+    }
   }
   for (std::uint64_t v = 0; v < N; v += 7) {
     decode_vertex(page, v, series.data());
-    for (std::uint32_t t = 0; t < n; ++t) ASSERT_EQ(series[t], window[std::uint64_t(t) * N + v]) << what << ": vertex " << v;
+    for (std::uint32_t t = 0; t < n; ++t) ASSERT_EQ(series[t], scalar[std::uint64_t(t) * N + v]) << what << ": vertex " << v;
   }
 }
 

@@ -1,0 +1,181 @@
+// compression/src/lane_blocks_avx2.cpp -- the AVX2 decoders of predictive_lanes pages, for CPUs
+// without AVX-512: each block of 16 lanes as two vectors of 8, bit-identical to lane_block_step.
+#include <immintrin.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "lane_blocks.h"
+
+namespace penumbra::compression::detail {
+
+namespace {
+
+// A target region rather than an attribute, so that the lambdas inside are compiled for it too.
+#pragma GCC push_options
+#pragma GCC target("avx2")
+
+constexpr std::uint64_t kHalf = kLaneBlock / 2;
+
+// One block's `width`-bit slots at bit `pos`, as lanes 0-7 and 8-15, moving pos on.
+inline void slots256(const std::uint32_t* words, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+  const std::uint32_t* r = words + (pos >> 5) * kLaneBlock;
+  const __m128i right = _mm_cvtsi32_si128(int(pos & 31)), left = _mm_cvtsi32_si128(int(32 - (pos & 31)));
+  const __m256i mask = _mm256_set1_epi32(int(low_mask(width)));
+  pos += width;
+  for (std::uint64_t h = 0; h < 2; ++h) {
+    const __m256i low = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + h * kHalf));
+    const __m256i high = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + kLaneBlock + h * kHalf));
+    u[h] = _mm256_and_si256(_mm256_or_si256(_mm256_srl_epi32(low, right), _mm256_sll_epi32(high, left)), mask);
+  }
+}
+
+// Adds exception row `row`'s high parts to its lanes of u, moving row and high on (rare: lane by
+// lane through memory).
+inline void patch256(const LaneBlocks& L, std::uint64_t& row, std::uint64_t& high, std::uint32_t width, __m256i u[2]) {
+  alignas(32) std::uint32_t lanes[kLaneBlock];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), u[0]);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes + kHalf), u[1]);
+  for (std::uint32_t m = L.exception_lanes[row++]; m; m &= m - 1)
+    lanes[std::countr_zero(m)] += std::uint32_t(std::uint64_t(L.highs[high++]) << width);
+  u[0] = _mm256_load_si256(reinterpret_cast<const __m256i*>(lanes));
+  u[1] = _mm256_load_si256(reinterpret_cast<const __m256i*>(lanes + kHalf));
+}
+
+// All ones in the lanes of `bits` (bit l: lane l) among lanes 8 h .. 8 h + 7.
+inline __m256i lane_mask(std::uint32_t bits, std::uint64_t h) {
+  const __m256i select = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256i b = _mm256_and_si256(_mm256_set1_epi32(int(bits >> (8 * h))), select);
+  return _mm256_cmpeq_epi32(b, select);
+}
+
+// Stores a block's values: whole vectors, or the first `lanes` of them (the last block).
+inline void put256(const __m256 v[2], std::uint64_t lanes, float* out) {
+  if (lanes == kLaneBlock) {
+    _mm256_storeu_ps(out, v[0]);
+    _mm256_storeu_ps(out + kHalf, v[1]);
+    return;
+  }
+  alignas(32) float all[kLaneBlock];
+  _mm256_store_ps(all, v[0]);
+  _mm256_store_ps(all + kHalf, v[1]);
+  std::memcpy(out, all, lanes * 4);
+}
+
+inline std::uint64_t block_lanes(const EncodedPage& p, std::uint64_t k) {
+  return std::min<std::uint64_t>(kLaneBlock, p.vertex_count - k * kLaneBlock);
+}
+
+// Each block keeps k and its last difference as in avx512_window. One block at a time: its two
+// halves' chains overlap enough, and two blocks' state no longer fits in the 16 vector registers
+// (they spilled, and decoded mug 25 % slower). kBlocks stays a parameter of the loop's shape.
+void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
+  constexpr std::uint64_t kBlocks = 1;
+  const LaneBlocks& L = p.lanes;
+  const std::uint64_t N = p.vertex_count;
+  const std::uint32_t n = p.step_count, fw = p.first_width;
+  const std::uint32_t* words = L.words.data();
+  const std::uint16_t* exception_steps = L.exception_steps.data();
+  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  for (std::uint64_t b0 = b; b0 < e; b0 += kBlocks) {
+    __m256i k[kBlocks][2], d[kBlocks][2], linear[kBlocks][2], bias[kBlocks];
+    std::uint64_t pos[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks], lanes[kBlocks];
+    std::uint32_t w1[kBlocks], w[kBlocks], next[kBlocks];
+    for (std::uint64_t j = 0; j < kBlocks; ++j) {
+      const std::uint64_t c = std::min(b0 + j, e - 1);
+      lanes[j] = b0 + j < e ? block_lanes(p, c) : 0;
+      for (std::uint64_t h = 0; h < 2; ++h) linear[j][h] = lane_mask(L.linear[c], h);
+      pos[j] = L.bit_start[c];
+      w1[j] = lane_width_1(L, c);
+      w[j] = lane_width(L, c);
+      bias[j] = _mm256_set1_epi32(int(offset_bias(w[j])));
+      row[j] = L.row_start[c];
+      row_end[j] = L.row_start[c + 1];
+      high[j] = L.high_start[c];
+      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+    }
+    // Block j's prediction errors at step t, with its exception row's high parts if it has one.
+    const auto errors = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width, __m256i offset, __m256i u[2]) {
+      slots256(words, pos[j], width, u);
+      if (next[j] == t) {
+        patch256(L, row[j], high[j], width, u);
+        next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+      }
+      for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sub_epi32(u[h], offset);
+    };
+    const auto put = [&](std::uint64_t j, float* row_out) {
+      if (lanes[j] == 0) return;
+      const __m256 v[2] = {_mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[j][0]), step)),
+                           _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[j][1]), step))};
+      put256(v, lanes[j], row_out + j * kLaneBlock);
+    };
+    float* out = window + b0 * kLaneBlock;
+    for (std::uint64_t j = 0; j < kBlocks; ++j) {
+      slots256(words, pos[j], fw, k[j]);
+      put(j, out);
+    }
+    if (n >= 2) {
+      out += N;
+      for (std::uint64_t j = 0; j < kBlocks; ++j) {
+        errors(j, 1, w1[j], _mm256_set1_epi32(int(offset_bias(w1[j]))), d[j]);
+        for (std::uint64_t h = 0; h < 2; ++h) k[j][h] = _mm256_add_epi32(k[j][h], d[j][h]);
+        put(j, out);
+      }
+    }
+    for (std::uint32_t t = 2; t < n; ++t) {
+      out += N;
+      for (std::uint64_t j = 0; j < kBlocks; ++j) {
+        __m256i error[2];
+        errors(j, t, w[j], bias[j], error);
+        for (std::uint64_t h = 0; h < 2; ++h) {
+          d[j][h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[j][h], linear[j][h]));
+          k[j][h] = _mm256_add_epi32(k[j][h], d[j][h]);
+        }
+        put(j, out);
+      }
+    }
+  }
+}
+
+void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
+  const LaneBlocks& L = p.lanes;
+  const std::uint32_t* words = L.words.data();
+  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  for (std::uint64_t k = b; k < e; ++k) {
+    LaneBlockState& s = states[k];
+    const std::uint32_t t = s.t, width = t == 1 ? lane_width_1(L, k) : lane_width(L, k);
+    __m256i u[2];
+    slots256(words, s.pos, width, u);
+    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t) patch256(L, s.row, s.high, width, u);
+    const __m256i bias = _mm256_set1_epi32(int(offset_bias(width)));
+    const std::uint32_t linear = t >= 2 ? L.linear[k] : 0;
+    __m256 v[2];
+    for (std::uint64_t h = 0; h < 2; ++h) {
+      __m256i* k1 = reinterpret_cast<__m256i*>(s.k1 + h * kHalf);
+      __m256i* k2 = reinterpret_cast<__m256i*>(s.k2 + h * kHalf);
+      const __m256i last = _mm256_loadu_si256(k1), before = _mm256_loadu_si256(k2);
+      const __m256i trend = _mm256_and_si256(_mm256_sub_epi32(last, before), lane_mask(linear, h));
+      const __m256i next = _mm256_add_epi32(_mm256_add_epi32(last, trend), _mm256_sub_epi32(u[h], bias));
+      _mm256_storeu_si256(k2, last);
+      _mm256_storeu_si256(k1, next);
+      v[h] = _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(next), step));
+    }
+    ++s.t;
+    put256(v, block_lanes(p, k), out + k * kLaneBlock);
+  }
+}
+
+#pragma GCC pop_options
+
+}  // namespace
+
+void lane_blocks_window_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
+  avx2_window_impl(p, b, e, window);
+}
+
+void lane_blocks_next_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
+  avx2_next_impl(p, b, e, states, out);
+}
+
+}  // namespace penumbra::compression::detail
