@@ -29,7 +29,13 @@ namespace penumbra::compression::detail {
 
 constexpr std::uint64_t kLaneBlock = LaneBlocks::kLanes;
 
-inline std::uint64_t lane_block_count(std::uint64_t vertices) { return (vertices + kLaneBlock - 1) / kLaneBlock; }
+inline std::uint64_t lane_block_count(std::uint64_t vertices) {
+  return vertices / kLaneBlock + (vertices % kLaneBlock != 0);  // no wrap for any 64-bit count
+}
+
+/// Rows of words for `bits` bits per column. Every slot read loads its row and the next, and a
+/// zero-width slot can sit at the very end (bit `bits`), so one spare row lies past that row.
+inline std::uint64_t lane_word_rows(std::uint64_t bits) { return bits / 32 + 2; }
 
 inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b]; }
 inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 1]; }

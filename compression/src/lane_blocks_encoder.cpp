@@ -175,7 +175,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
   LaneBlocks L;
   std::uint64_t bits = 0;
   for (const Chunk& c : done) bits += c.bits;
-  const std::uint64_t rows = (bits + 31) / 32 + 1;
+  const std::uint64_t rows = lane_word_rows(bits);
   L.words.assign((rows + 2) * kLaneBlock, 0);
   std::vector<std::uint8_t> high_bytes;
   BitWriter high_writer(high_bytes);
@@ -205,6 +205,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
     at += c.bits;
   }
   L.words.resize(rows * kLaneBlock);
+  L.words.shrink_to_fit();  // as a parsed page holds them: a read past the rows is caught in tests
   high_writer.flush();
   high_bytes.resize(high_bytes.size() + 8, 0);
   L.exception_bits = std::move(high_bytes);

@@ -61,7 +61,7 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p) {
       high_bits += std::uint64_t(std::popcount(L.exception_lanes[at])) * lane_exception_width(L, b);
   r.get_array(L.exception_bits, (high_bits + 7) / 8, 8);
   r.get_array(L.raw_values, raw);
-  r.get_array(L.words, kLaneBlock * ((bits + 31) / 32 + 1));
+  r.get_array(L.words, kLaneBlock * lane_word_rows(bits));
 }
 
 }  // namespace

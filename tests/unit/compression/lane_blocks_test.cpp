@@ -9,6 +9,7 @@
 
 #include "crc32_reference.h"
 #include "lane_blocks.h"
+#include "page_format.h"
 #include "expect_error.h"
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/version.h"
@@ -88,6 +89,43 @@ TEST(LaneBlocks, ValuesTheQuantiserCannotHoldAreStoredExactly) {
   ASSERT_EQ(page.method, PageMethod::predictive_lanes);
   EXPECT_GT(page.lanes.raw_values.size(), 0u);
   expect_paths_agree(f, 12, page, "raw lanes");
+}
+
+TEST(LaneBlocks, ZeroWidthStepsAtTheVeryEndOfTheColumnsStayInside) {
+  // Two blocks of a constant field with 16-bit k_0 and no differences: 32 bits per column, so the
+  // last block's zero-width steps sit exactly at the end of the columns, where every slot read
+  // still loads the row after its own. The page goes through a file's bytes so that its words
+  // have no spare capacity (the sanitizer build catches a read past them).
+  constexpr std::uint64_t N = 32;
+  constexpr std::uint32_t n = 3;
+  const float bound = 1e-3f, step = 2 * bound;
+  EncodedPage page;
+  page.method = PageMethod::predictive_lanes;
+  page.vertex_count = N;
+  page.step_count = n;
+  page.window = 8;
+  page.codebook_size = 2;
+  page.times = {0.0, 1.0, 2.0};
+  page.value_min = page.value_max = 1000 * step;
+  page.bound = bound;
+  page.step = step;
+  page.lo = 0;
+  page.first_width = 16;
+  page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, step, bound, page.first_width,
+                                         [&](std::uint64_t, std::uint64_t count, float* x) {
+                                           std::fill(x, x + count * page.window, 1000 * step);
+                                         });
+  ASSERT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
+  ASSERT_EQ(page.lanes.bit_start.back(), 32u);
+  validate_page(page);
+  const auto bytes = detail::serialize_page(page, 0);
+  detail::PageHeader header;
+  ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
+  const EncodedPage parsed = detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, N,
+                                                        page.window, page.codebook_size, "test page",
+                                                        std::uint32_t(PageMethod::predictive_lanes));
+  SyntheticField f{N, n, std::vector<float>(N * n, 1000 * step), page.times};
+  expect_paths_agree(f, n, parsed, "constant blocks ending on a row");
 }
 
 TEST(LaneBlocks, ValidatePageFindsFaultsInTheTables) {
