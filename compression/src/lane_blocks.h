@@ -65,6 +65,16 @@ struct LaneBlockState {
   std::uint64_t row = 0, high = 0;
 };
 
+/// The width of block b's slots at step t >= 1.
+inline std::uint32_t lane_step_width(const LaneBlocks& L, std::uint64_t b, std::uint32_t t) {
+  return t == 1 ? lane_width_1(L, b) : lane_width(L, b);
+}
+
+/// True when block b's next exception row (from state s) is at the step s is about to decode.
+inline bool exception_row_due(const LaneBlocks& L, std::uint64_t b, const LaneBlockState& s) {
+  return s.row < L.row_start[b + 1] && L.exception_steps[s.row] == s.t;
+}
+
 /// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
 /// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
 enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2 };

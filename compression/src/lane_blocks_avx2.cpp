@@ -144,10 +144,10 @@ void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, Lane
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
-    const std::uint32_t t = s.t, width = t == 1 ? lane_width_1(L, k) : lane_width(L, k);
+    const std::uint32_t t = s.t, width = lane_step_width(L, k, t);
     __m256i u[2];
     slots256(words, s.pos, width, u);
-    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t) patch256(L, s.row, s.high, width, u);
+    if (exception_row_due(L, k, s)) patch256(L, s.row, s.high, width, u);
     const __m256i bias = _mm256_set1_epi32(int(offset_bias(width)));
     const std::uint32_t linear = t >= 2 ? L.linear[k] : 0;
     __m256 v[2];

@@ -30,10 +30,10 @@ void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) {
     s.t = 1;
     return;
   }
-  const std::uint32_t width = t == 1 ? lane_width_1(L, b) : lane_width(L, b);
+  const std::uint32_t width = lane_step_width(L, b, t);
   std::uint32_t u[kLaneBlock];
   for (std::uint32_t l = 0; l < kLaneBlock; ++l) u[l] = lane_slot(words, s.pos, l, width);
-  if (s.row < L.row_start[b + 1] && L.exception_steps[s.row] == t) {
+  if (exception_row_due(L, b, s)) {
     for (std::uint32_t lanes = L.exception_lanes[s.row++]; lanes; lanes &= lanes - 1)
       u[std::countr_zero(lanes)] += std::uint32_t(std::uint64_t(L.highs[s.high++]) << width);
   }
@@ -217,9 +217,9 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
   const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
-    const std::uint32_t t = s.t, width = t == 1 ? lane_width_1(L, k) : lane_width(L, k);
+    const std::uint32_t t = s.t, width = lane_step_width(L, k, t);
     __m512i u = slots512(words, s.pos, width);
-    if (s.row < L.row_start[k + 1] && L.exception_steps[s.row] == t)
+    if (exception_row_due(L, k, s))
       u = patch512(L.exception_lanes.data(), L.highs.data(), s.row, s.high, width, u);
     const __m512i k1 = _mm512_loadu_si512(s.k1), k2 = _mm512_loadu_si512(s.k2);
     const __m512i next = next_k512(u, _mm512_set1_epi32(int(offset_bias(width))), t >= 2 ? L.linear[k] : 0, k1, k2);
