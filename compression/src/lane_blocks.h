@@ -18,6 +18,7 @@
 // floats from raw_values. All integer arithmetic wraps in 32 bits, so that the scalar and the
 // vector decoders agree exactly.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -36,6 +37,15 @@ inline std::uint64_t lane_block_count(std::uint64_t vertices) {
 /// Rows of words for `bits` bits per column. Every slot read loads its row and the next, and a
 /// zero-width slot can sit at the very end (bit `bits`), so one spare row lies past that row.
 inline std::uint64_t lane_word_rows(std::uint64_t bits) { return bits / 32 + 2; }
+
+/// Lanes of block b that hold a vertex (16, fewer in the last block), and their bit mask.
+inline std::uint64_t lane_block_lanes(std::uint64_t vertices, std::uint64_t b) {
+  return std::min<std::uint64_t>(kLaneBlock, vertices - b * kLaneBlock);
+}
+inline std::uint16_t lane_block_mask(std::uint64_t vertices, std::uint64_t b) {
+  const std::uint64_t lanes = lane_block_lanes(vertices, b);
+  return std::uint16_t(lanes == kLaneBlock ? 0xFFFF : (1u << lanes) - 1);
+}
 
 inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b]; }
 inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 1]; }
@@ -75,6 +85,12 @@ inline bool exception_row_due(const LaneBlocks& L, std::uint64_t b, const LaneBl
   return s.row < L.row_start[b + 1] && L.exception_steps[s.row] == s.t;
 }
 
+/// The step of exception row `row` of a block whose rows end at `row_end`; 0 once none is left
+/// (no exception lies at step 0).
+inline std::uint32_t next_exception_step(const std::uint16_t* steps, std::uint64_t row, std::uint64_t row_end) {
+  return row < row_end ? steps[row] : 0;
+}
+
 /// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
 /// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
 enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2 };
@@ -110,7 +126,7 @@ void lane_blocks_vertex(const EncodedPage& p, std::uint64_t v, float* out);
 
 /// Encodes a window of N vertices into lane blocks. gather(first, count, x) writes vertices
 /// [first, first + count) to x, `window` floats each (the first `steps` meaningful). The
-/// derived tables are filled as a parsed page's are.
+/// derived tables are left empty: lane_blocks_error derives them, as for a parsed page.
 LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
                              float bound, std::uint32_t first_width,
                              const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather);

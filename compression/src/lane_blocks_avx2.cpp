@@ -63,77 +63,56 @@ inline void put256(const __m256 v[2], std::uint64_t lanes, float* out) {
   std::memcpy(out, all, lanes * 4);
 }
 
-inline std::uint64_t block_lanes(const EncodedPage& p, std::uint64_t k) {
-  return std::min<std::uint64_t>(kLaneBlock, p.vertex_count - k * kLaneBlock);
-}
-
 // Each block keeps k and its last difference as in avx512_window. One block at a time: its two
 // halves' chains overlap enough, and two blocks' state no longer fits in the 16 vector registers
-// (they spilled, and decoded mug 25 % slower). kBlocks stays a parameter of the loop's shape.
+// (they spilled, and decoded mug 25 % slower).
 void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
-  constexpr std::uint64_t kBlocks = 1;
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
   const std::uint32_t* words = L.words.data();
   const std::uint16_t* exception_steps = L.exception_steps.data();
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
-  for (std::uint64_t b0 = b; b0 < e; b0 += kBlocks) {
-    __m256i k[kBlocks][2], d[kBlocks][2], linear[kBlocks][2], bias[kBlocks];
-    std::uint64_t pos[kBlocks], row[kBlocks], row_end[kBlocks], high[kBlocks], lanes[kBlocks];
-    std::uint32_t w1[kBlocks], w[kBlocks], next[kBlocks];
-    for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      const std::uint64_t c = std::min(b0 + j, e - 1);
-      lanes[j] = b0 + j < e ? block_lanes(p, c) : 0;
-      for (std::uint64_t h = 0; h < 2; ++h) linear[j][h] = lane_mask(L.linear[c], h);
-      pos[j] = L.bit_start[c];
-      w1[j] = lane_width_1(L, c);
-      w[j] = lane_width(L, c);
-      bias[j] = _mm256_set1_epi32(int(offset_bias(w[j])));
-      row[j] = L.row_start[c];
-      row_end[j] = L.row_start[c + 1];
-      high[j] = L.high_start[c];
-      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
-    }
-    // Block j's prediction errors at step t, with its exception row's high parts if it has one.
-    const auto errors = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width, __m256i offset, __m256i u[2]) {
-      slots256(words, pos[j], width, u);
-      if (next[j] == t) {
-        patch256(L, row[j], high[j], width, u);
-        next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+  for (std::uint64_t c = b; c < e; ++c) {
+    const std::uint64_t lanes = lane_block_lanes(N, c), row_end = L.row_start[c + 1];
+    const std::uint32_t w1 = lane_width_1(L, c), w = lane_width(L, c);
+    const __m256i linear[2] = {lane_mask(L.linear[c], 0), lane_mask(L.linear[c], 1)};
+    const __m256i bias = _mm256_set1_epi32(int(offset_bias(w)));
+    std::uint64_t pos = L.bit_start[c], row = L.row_start[c], high = L.high_start[c];
+    std::uint32_t next = next_exception_step(exception_steps, row, row_end);
+    __m256i k[2], d[2];
+    // The prediction errors at step t, with the block's exception row's high parts if it has one.
+    const auto errors = [&](std::uint32_t t, std::uint32_t width, __m256i offset, __m256i u[2]) {
+      slots256(words, pos, width, u);
+      if (next == t) {
+        patch256(L, row, high, width, u);
+        next = next_exception_step(exception_steps, row, row_end);
       }
       for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sub_epi32(u[h], offset);
     };
-    const auto put = [&](std::uint64_t j, float* row_out) {
-      if (lanes[j] == 0) return;
-      const __m256 v[2] = {_mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[j][0]), step)),
-                           _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[j][1]), step))};
-      put256(v, lanes[j], row_out + j * kLaneBlock);
+    const auto put = [&](float* row_out) {
+      const __m256 v[2] = {_mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[0]), step)),
+                           _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[1]), step))};
+      put256(v, lanes, row_out);
     };
-    float* out = window + b0 * kLaneBlock;
-    for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      slots256(words, pos[j], fw, k[j]);
-      put(j, out);
-    }
+    float* out = window + c * kLaneBlock;
+    slots256(words, pos, fw, k);
+    put(out);
     if (n >= 2) {
       out += N;
-      for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        errors(j, 1, w1[j], _mm256_set1_epi32(int(offset_bias(w1[j]))), d[j]);
-        for (std::uint64_t h = 0; h < 2; ++h) k[j][h] = _mm256_add_epi32(k[j][h], d[j][h]);
-        put(j, out);
-      }
+      errors(1, w1, _mm256_set1_epi32(int(offset_bias(w1))), d);
+      for (std::uint64_t h = 0; h < 2; ++h) k[h] = _mm256_add_epi32(k[h], d[h]);
+      put(out);
     }
     for (std::uint32_t t = 2; t < n; ++t) {
       out += N;
-      for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        __m256i error[2];
-        errors(j, t, w[j], bias[j], error);
-        for (std::uint64_t h = 0; h < 2; ++h) {
-          d[j][h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[j][h], linear[j][h]));
-          k[j][h] = _mm256_add_epi32(k[j][h], d[j][h]);
-        }
-        put(j, out);
+      __m256i error[2];
+      errors(t, w, bias, error);
+      for (std::uint64_t h = 0; h < 2; ++h) {
+        d[h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[h], linear[h]));
+        k[h] = _mm256_add_epi32(k[h], d[h]);
       }
+      put(out);
     }
   }
 }
@@ -162,7 +141,7 @@ void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, Lane
       v[h] = _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(next), step));
     }
     ++s.t;
-    put256(v, block_lanes(p, k), out + k * kLaneBlock);
+    put256(v, lane_block_lanes(p.vertex_count, k), out + k * kLaneBlock);
   }
 }
 

@@ -21,9 +21,6 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
   if (L.widths.size() != 3 * B || L.linear.size() != B || L.raw.size() != B || L.exception_rows.size() != B)
     return "lane block tables do not have one entry per block of 16 vertices";
-  // Lanes past the last vertex are padding: nothing may be stored for them.
-  const std::uint64_t tail = N - (B - 1) * kLaneBlock;
-  const std::uint16_t real = std::uint16_t(tail == kLaneBlock ? 0xFFFF : (1u << tail) - 1);
   LaneBlocks d;
   d.bit_start.resize(B + 1);
   d.raw_start.resize(B + 1);
@@ -38,7 +35,8 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
     const std::uint32_t w1 = lane_width_1(L, b), w = lane_width(L, b), x = lane_exception_width(L, b);
     if (w1 > 32 || w > 32 || x > 32) return at_block("width over 32 bits", b);
     if ((n < 2 && w1 != 0) || (n < 3 && w != 0)) return at_block("width for a step the page does not have", b);
-    const std::uint16_t mask = b + 1 == B ? real : std::uint16_t(0xFFFF);
+    // Lanes past the last vertex are padding: nothing may be stored for them.
+    const std::uint16_t mask = lane_block_mask(N, b);
     if ((L.linear[b] & ~mask) || (L.raw[b] & ~mask)) return at_block("predictor or raw flag on a padding lane", b);
     bits += lane_block_bits(p.first_width, w1, w, n);
     raw += std::uint64_t(std::popcount(L.raw[b])) * n;

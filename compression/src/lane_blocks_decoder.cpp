@@ -60,7 +60,7 @@ void write_raw_step(const EncodedPage& p, std::uint64_t b, std::uint32_t t, floa
 }  // namespace
 
 void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockState& s, float* row) {
-  const std::uint64_t lanes = std::min<std::uint64_t>(kLaneBlock, p.vertex_count - b * kLaneBlock);
+  const std::uint64_t lanes = lane_block_lanes(p.vertex_count, b);
   for (std::uint64_t l = 0; l < lanes; ++l) row[l] = p.lo + float(std::int32_t(s.k1[l])) * p.step;
   write_raw_step(p, b, s.t - 1, row);
 }
@@ -134,11 +134,6 @@ inline __m512 values512(__m512 lo, __m512 step, __m512i k) {
   return _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k), step));
 }
 
-inline __mmask16 real_lanes(const EncodedPage& p, std::uint64_t block) {
-  const std::uint64_t N = p.vertex_count, lanes = std::min<std::uint64_t>(kLaneBlock, N - block * kLaneBlock);
-  return __mmask16(lanes == kLaneBlock ? 0xFFFF : (1u << lanes) - 1);
-}
-
 // Four blocks side by side, so that their prediction chains overlap, each step of each two row
 // loads, two shifts, an or and a mask; an exception row adds its high parts, expanded into their
 // lanes. Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add
@@ -165,7 +160,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     std::uint32_t w1[kBlocks], w[kBlocks], next[kBlocks];
     for (std::uint64_t j = 0; j < kBlocks; ++j) {
       const std::uint64_t k = std::min(b0 + j, e - 1);
-      store[j] = b0 + j >= e ? 0 : real_lanes(p, k);
+      store[j] = b0 + j >= e ? 0 : lane_block_mask(N, k);
       linear[j] = L.linear[k];
       pos[j] = L.bit_start[k];
       w1[j] = lane_width_1(L, k);
@@ -173,14 +168,14 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       row[j] = L.row_start[k];
       row_end[j] = L.row_start[k + 1];
       high[j] = L.high_start[k];
-      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+      next[j] = next_exception_step(exception_steps, row[j], row_end[j]);
     }
     // Block j's slots at step t, with its exception row's high parts if it has one there.
     const auto step_slots = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width) {
       const __m512i u = slots512(words, pos[j], width);
       if (next[j] != t) return u;
       const __m512i patched = patch512(exception_lanes, highs, row[j], high[j], width, u);
-      next[j] = row[j] < row_end[j] ? exception_steps[row[j]] : 0;
+      next[j] = next_exception_step(exception_steps, row[j], row_end[j]);
       return patched;
     };
     float* out = window + b0 * kLaneBlock;
@@ -226,7 +221,7 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
     _mm512_storeu_si512(s.k2, k1);
     _mm512_storeu_si512(s.k1, next);
     ++s.t;
-    _mm512_mask_storeu_ps(out + k * kLaneBlock, real_lanes(p, k), values512(lo, step, next));
+    _mm512_mask_storeu_ps(out + k * kLaneBlock, lane_block_mask(p.vertex_count, k), values512(lo, step, next));
   }
 }
 #pragma GCC pop_options

@@ -25,25 +25,19 @@ struct Chunk {
   std::vector<float> raw_values;
   std::vector<std::uint32_t> words;
   std::uint64_t bits = 0;
-};
 
-constexpr std::uint64_t kChunkBlocks = 64;
-
-class ChunkWriter {
-public:
-  explicit ChunkWriter(Chunk& c) : m_c(c) {}
+  // Writes `value` (`width` bits) at bit `pos` of lane `lane`'s column.
   void put(std::uint32_t lane, std::uint64_t pos, std::uint32_t width, std::uint32_t value) {
     if (width == 0) return;
     const std::uint64_t row = pos >> 5;
     const std::uint32_t sh = std::uint32_t(pos & 31);
-    if ((row + 2) * kLaneBlock > m_c.words.size()) m_c.words.resize((row + 2) * kLaneBlock * 2, 0);
-    m_c.words[row * kLaneBlock + lane] |= value << sh;
-    if (sh + width > 32) m_c.words[(row + 1) * kLaneBlock + lane] |= value >> (32 - sh);
+    if ((row + 2) * kLaneBlock > words.size()) words.resize((row + 2) * kLaneBlock * 2, 0);
+    words[row * kLaneBlock + lane] |= value << sh;
+    if (sh + width > 32) words[(row + 1) * kLaneBlock + lane] |= value >> (32 - sh);
   }
-
-private:
-  Chunk& m_c;
 };
+
+constexpr std::uint64_t kChunkBlocks = 64;
 
 // The page's quantiser (k = round((x - lo) / step), held within `bound`) and shape.
 struct Quantiser {
@@ -52,8 +46,8 @@ struct Quantiser {
 };
 
 // Encodes one block of `lanes` vertices (x: their windows, q.window floats apart) into c.
-void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk& c, ChunkWriter& out,
-                  std::vector<std::int32_t>& d, std::vector<std::uint32_t>& kk) {
+void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk& c, std::vector<std::int32_t>& d,
+                  std::vector<std::uint32_t>& kk) {
   const std::uint32_t n = q.steps, fw = q.first_width;
   const float lo = q.lo, step = q.step, bound = q.bound;
   // k_0 per lane and each step's difference from its prediction, d[l * n + t]; raw lanes and
@@ -117,7 +111,7 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
   if (n < 3) w = 0;
   // Slots, exception rows and high parts.
   std::uint64_t pos = c.bits;
-  for (std::uint64_t l = 0; l < kLaneBlock; ++l) out.put(std::uint32_t(l), pos, fw, k0[l]);
+  for (std::uint64_t l = 0; l < kLaneBlock; ++l) c.put(std::uint32_t(l), pos, fw, k0[l]);
   pos += fw;
   std::uint32_t high_width = 0;
   const std::size_t rows_before = c.exception_steps.size();
@@ -127,7 +121,7 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
     for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
       const std::int64_t v = std::int64_t(d[l * n + t]) + bias;
       const std::uint32_t low = std::uint32_t(v) & low_mask(width);
-      out.put(std::uint32_t(l), pos, width, low);
+      c.put(std::uint32_t(l), pos, width, low);
       if (signed_width(d[l * n + t]) > width) {
         // Exact: v - low is a multiple of 2^width (width < 32 here).
         const std::int32_t high = std::int32_t((v - std::int64_t(low)) >> width);
@@ -163,12 +157,11 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
     thread_local std::vector<std::uint32_t> k;
     for (std::size_t c = c0; c < c1; ++c) {
       Chunk& chunk = done[c];
-      ChunkWriter writer(chunk);
       const std::uint64_t first = c * kChunkBlocks * kLaneBlock, count = std::min(N - first, kChunkBlocks * kLaneBlock);
       x.resize(count * window);
       gather(first, count, x.data());
       for (std::uint64_t v = 0; v < count; v += kLaneBlock)
-        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), q, chunk, writer, d, k);
+        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), q, chunk, d, k);
     }
   });
   // Join: tables concatenated, each chunk's columns ORed in at its bit offset, high parts packed.

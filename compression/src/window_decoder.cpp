@@ -331,8 +331,8 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     const std::uint64_t B = lane_block_count(N);
     sized(L.widths.size(), 3 * B, "lane widths");
     for (const auto* table : {&L.linear, &L.raw, &L.exception_rows}) sized(table->size(), B, "lane block table");
-    for (const auto* starts : {&L.bit_start, &L.raw_start}) sized(starts->size(), B + 1, "lane block starts");
-    for (const auto* starts : {&L.row_start, &L.high_start}) sized(starts->size(), B + 1, "lane block starts");
+    for (const auto* starts : {&L.bit_start, &L.raw_start, &L.row_start, &L.high_start})
+      sized(starts->size(), B + 1, "lane block starts");
     sized(L.exception_steps.size(), L.row_start.back(), "exception_steps");
     sized(L.exception_lanes.size(), L.row_start.back(), "exception_lanes");
     sized(L.highs.size(), L.high_start.back(), "highs");
