@@ -34,9 +34,18 @@ inline std::uint64_t lane_block_count(std::uint64_t vertices) {
   return vertices / kLaneBlock + (vertices % kLaneBlock != 0);  // no wrap for any 64-bit count
 }
 
-/// Rows of words for `bits` bits per column. Every slot read loads its row and the next, and a
-/// zero-width slot can sit at the very end (bit `bits`), so one spare row lies past that row.
+/// Rows of words the file stores for `bits` bits per column. The scalar slot read loads its row
+/// and the next, and a zero-width slot can sit at the very end (bit `bits`), so one spare row lies
+/// past that row.
 inline std::uint64_t lane_word_rows(std::uint64_t bits) { return bits / 32 + 2; }
+
+/// Words a page holds in memory: a zero row before row 0, then the file's rows. The vector
+/// decoders read the 32 bits that end at a slot's last bit, from the slot's row and the row
+/// below it; for a slot in row 0 that is the zero row.
+inline std::uint64_t lane_words_held(std::uint64_t bits) { return kLaneBlock * (1 + lane_word_rows(bits)); }
+
+/// Row 0 of a page's columns.
+inline const std::uint32_t* lane_rows(const LaneBlocks& L) { return L.words.data() + kLaneBlock; }
 
 /// Lanes of block b that hold a vertex (16, fewer in the last block), and their bit mask.
 inline std::uint64_t lane_block_lanes(std::uint64_t vertices, std::uint64_t b) {
@@ -59,10 +68,11 @@ inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1
 inline std::uint32_t low_mask(std::uint32_t width) { return width >= 32 ? ~0u : (1u << width) - 1; }
 inline std::uint32_t offset_bias(std::uint32_t width) { return width ? 1u << (width - 1) : 0u; }
 
-/// Lane l's `width` bits at bit `pos` of its column (the spare row makes word row + 1 readable).
-inline std::uint32_t lane_slot(const std::uint32_t* words, std::uint64_t pos, std::uint32_t lane, std::uint32_t width) {
+/// Lane l's `width` bits at bit `pos` of its column (`rows`: row 0; the spare row makes word
+/// row + 1 readable).
+inline std::uint32_t lane_slot(const std::uint32_t* rows, std::uint64_t pos, std::uint32_t lane, std::uint32_t width) {
   const std::uint64_t row = pos >> 5;
-  const std::uint64_t pair = (std::uint64_t(words[(row + 1) * kLaneBlock + lane]) << 32) | words[row * kLaneBlock + lane];
+  const std::uint64_t pair = (std::uint64_t(rows[(row + 1) * kLaneBlock + lane]) << 32) | rows[row * kLaneBlock + lane];
   return std::uint32_t(pair >> (pos & 31)) & low_mask(width);
 }
 

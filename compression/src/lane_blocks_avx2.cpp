@@ -70,7 +70,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
-  const std::uint32_t* words = L.words.data();
+  const std::uint32_t* words = lane_rows(L);
   const std::uint16_t* exception_steps = L.exception_steps.data();
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t c = b; c < e; ++c) {
@@ -119,7 +119,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
 
 void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
-  const std::uint32_t* words = L.words.data();
+  const std::uint32_t* words = lane_rows(L);
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];

@@ -61,7 +61,7 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   if (L.exception_steps.size() != rows || L.exception_lanes.size() != rows) return "exception row tables have the wrong size";
   if (L.exception_bits.size() != (high_bits + 7) / 8 + 8) return "exception high parts have the wrong size";
   if (L.raw_values.size() != raw) return "raw lane values have the wrong size";
-  if (L.words.size() != kLaneBlock * lane_word_rows(bits)) return "lane words have the wrong size";
+  if (L.words.size() != lane_words_held(bits)) return "lane words have the wrong size";
   // The high parts, unpacked and signed, in row order.
   d.highs.resize(highs);
   std::uint64_t at = 0;

@@ -22,17 +22,17 @@ void lane_block_begin(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) 
 
 void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) {
   const LaneBlocks& L = p.lanes;
-  const std::uint32_t* words = L.words.data();
+  const std::uint32_t* rows = lane_rows(L);
   const std::uint32_t t = s.t;
   if (t == 0) {
-    for (std::uint32_t l = 0; l < kLaneBlock; ++l) s.k1[l] = s.k2[l] = lane_slot(words, s.pos, l, p.first_width);
+    for (std::uint32_t l = 0; l < kLaneBlock; ++l) s.k1[l] = s.k2[l] = lane_slot(rows, s.pos, l, p.first_width);
     s.pos += p.first_width;
     s.t = 1;
     return;
   }
   const std::uint32_t width = lane_step_width(L, b, t);
   std::uint32_t u[kLaneBlock];
-  for (std::uint32_t l = 0; l < kLaneBlock; ++l) u[l] = lane_slot(words, s.pos, l, width);
+  for (std::uint32_t l = 0; l < kLaneBlock; ++l) u[l] = lane_slot(rows, s.pos, l, width);
   if (exception_row_due(L, b, s)) {
     for (std::uint32_t lanes = L.exception_lanes[s.row++]; lanes; lanes &= lanes - 1)
       u[std::countr_zero(lanes)] += std::uint32_t(std::uint64_t(L.highs[s.high++]) << width);
@@ -99,108 +99,91 @@ std::atomic<int> g_lane_isa_cap{int(LaneIsa::avx512)};
 // uninitialised (a false positive inside immintrin.h).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-// A target region rather than an attribute, so that the lambdas inside are compiled for it too.
 #pragma GCC push_options
 #pragma GCC target("avx512f")
-// `width` bits of every lane at bit `pos` of its column, moving pos on: the two rows the slots
-// lie in, shifted together and masked.
-inline __m512i slots512(const std::uint32_t* words, std::uint64_t& pos, std::uint32_t width) {
-  const std::uint32_t* r = words + (pos >> 5) * kLaneBlock;
-  const std::uint32_t sh = std::uint32_t(pos & 31);
-  pos += width;
-  const __m512i u = _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(sh))),
-                                    _mm512_sll_epi32(_mm512_loadu_si512(r + kLaneBlock), _mm_cvtsi32_si128(int(32 - sh))));
-  return _mm512_and_si512(u, _mm512_set1_epi32(int(low_mask(width))));
+// The 32 bits of every lane's column that end at bit `end`: from the row `end` lies in and the row
+// below it (the page's zero row below row 0). A slot of width w that ends there is their top w
+// bits, so one arithmetic shift both extracts it and extends its sign: no mask, no bias.
+inline __m512i bits_ending512(const std::uint32_t* rows, std::uint64_t end) {
+  const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
+  const std::uint32_t sh = std::uint32_t(end & 31);
+  return _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm_cvtsi32_si128(int(sh))),
+                         _mm512_sll_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(32 - sh))));
 }
 
-// Adds exception row `row`'s high parts to its lanes of u, moving row and high on. (Plain
-// pointers rather than the page's vectors: after a vector store, which may alias anything, a
-// vector's data pointer would be loaded again.)
+// k_0: the unsigned `width`-bit slots ending at `end` (width 0: zeros, a shift by 32).
+inline __m512i first512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t width) {
+  return _mm512_srl_epi32(bits_ending512(rows, end), _mm_cvtsi32_si128(int(32 - width)));
+}
+
+// The prediction errors in the `width`-bit slots ending at `end`. A slot holds error + 2^(w-1)
+// (offset binary): with its top bit flipped it is the error in two's complement.
+inline __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t width) {
+  if (width == 0) return _mm512_setzero_si512();
+  const __m512i x = _mm512_xor_si512(bits_ending512(rows, end), _mm512_set1_epi32(std::int32_t(0x80000000u)));
+  return _mm512_sra_epi32(x, _mm_cvtsi32_si128(int(32 - width)));
+}
+
+// Adds exception row `row`'s high parts to its lanes of the errors e, moving row and high on.
+// (Plain pointers rather than the page's vectors: after a vector store, which may alias anything,
+// a vector's data pointer would be loaded again.)
 inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint64_t& row,
-                        std::uint64_t& high, std::uint32_t width, __m512i u) {
+                        std::uint64_t& high, std::uint32_t width, __m512i e) {
   const __mmask16 lanes = exception_lanes[row++];
   const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high);
   high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
-  return _mm512_add_epi32(u, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
-}
-
-// k_t from the slots u (offset by `bias`) and the two steps before.
-inline __m512i next_k512(__m512i u, __m512i bias, __mmask16 linear, __m512i k1, __m512i k2) {
-  const __m512i prediction = _mm512_mask_add_epi32(k1, linear, k1, _mm512_sub_epi32(k1, k2));
-  return _mm512_add_epi32(prediction, _mm512_sub_epi32(u, bias));
+  return _mm512_add_epi32(e, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
 }
 
 inline __m512 values512(__m512 lo, __m512 step, __m512i k) {
   return _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k), step));
 }
 
-// Four blocks side by side, so that their prediction chains overlap, each step of each two row
-// loads, two shifts, an or and a mask; an exception row adds its high parts, expanded into their
-// lanes. Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add
+// One block at a time, all its steps: its state stays in registers (four blocks side by side
+// spilled it, and ran 20 % slower). Each step is two row loads, two shifts, an or, an xor and a
+// shift; an exception row adds its high parts, expanded into their lanes. The block keeps k and
+// its last difference d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the
+// error, the others' the error alone (one masked add), the same integers as k_{t-1} + prediction
+// error. Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add
 // that are never fused.
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
-  constexpr std::uint64_t kBlocks = 4;
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
-  const std::uint32_t* words = L.words.data();
+  const std::uint32_t* rows = lane_rows(L);
   const std::uint16_t *exception_steps = L.exception_steps.data(), *exception_lanes = L.exception_lanes.data();
   const std::uint32_t* highs = L.highs.data();
   const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
-  for (std::uint64_t b0 = b; b0 < e; b0 += kBlocks) {
-    // A short group repeats its last block in the spare slots and stores none of them. Each block
-    // keeps k and its last difference d = k_t - k_{t-1}: the extrapolating lanes' next difference
-    // is d plus the slot's, the others' the slot's alone (one masked add instead of a subtraction
-    // and a masked add), and the same integers as k_{t-1} + prediction error.
-    __m512i k[kBlocks], d[kBlocks];
-    __mmask16 linear[kBlocks], store[kBlocks];
-    std::uint64_t pos[kBlocks];
-    // next: the step of the block's next exception row (0: none left).
-    std::uint64_t row[kBlocks], row_end[kBlocks], high[kBlocks];
-    std::uint32_t w1[kBlocks], w[kBlocks], next[kBlocks];
-    for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      const std::uint64_t k = std::min(b0 + j, e - 1);
-      store[j] = b0 + j >= e ? 0 : lane_block_mask(N, k);
-      linear[j] = L.linear[k];
-      pos[j] = L.bit_start[k];
-      w1[j] = lane_width_1(L, k);
-      w[j] = lane_width(L, k);
-      row[j] = L.row_start[k];
-      row_end[j] = L.row_start[k + 1];
-      high[j] = L.high_start[k];
-      next[j] = next_exception_step(exception_steps, row[j], row_end[j]);
-    }
-    // Block j's slots at step t, with its exception row's high parts if it has one there.
-    const auto step_slots = [&](std::uint64_t j, std::uint32_t t, std::uint32_t width) {
-      const __m512i u = slots512(words, pos[j], width);
-      if (next[j] != t) return u;
-      const __m512i patched = patch512(exception_lanes, highs, row[j], high[j], width, u);
-      next[j] = next_exception_step(exception_steps, row[j], row_end[j]);
+  for (std::uint64_t c = b; c < e; ++c) {
+    const __mmask16 store = lane_block_mask(N, c), linear = L.linear[c];
+    const std::uint32_t w1 = lane_width_1(L, c), w = lane_width(L, c);
+    const std::uint64_t row_end = L.row_start[c + 1];
+    std::uint64_t end = L.bit_start[c] + fw, row = L.row_start[c], high = L.high_start[c];
+    std::uint32_t next = next_exception_step(exception_steps, row, row_end);  // 0: no exception row left
+    // The errors at step t >= 1, ending at `end`, with the block's exception row if it has one there.
+    const auto errors = [&](std::uint32_t t, std::uint32_t width) {
+      const __m512i x = errors512(rows, end, width);
+      if (next != t) return x;
+      const __m512i patched = patch512(exception_lanes, highs, row, high, width, x);
+      next = next_exception_step(exception_steps, row, row_end);
       return patched;
     };
-    float* out = window + b0 * kLaneBlock;
-    for (std::uint64_t j = 0; j < kBlocks; ++j) {
-      k[j] = slots512(words, pos[j], fw);
-      _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
-    }
-    if (n >= 2) {
-      out += N;
-      for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        d[j] = _mm512_sub_epi32(step_slots(j, 1, w1[j]), _mm512_set1_epi32(int(offset_bias(w1[j]))));
-        k[j] = _mm512_add_epi32(k[j], d[j]);
-        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
-      }
-    }
-    __m512i bias[kBlocks];
-    for (std::uint64_t j = 0; j < kBlocks; ++j) bias[j] = _mm512_set1_epi32(int(offset_bias(w[j])));
+    float* out = window + c * kLaneBlock;
+    __m512i k = first512(rows, end, fw);
+    _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
+    if (n < 2) continue;
+    out += N;
+    end += w1;
+    __m512i d = errors(1, w1);
+    k = _mm512_add_epi32(k, d);
+    _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
     for (std::uint32_t t = 2; t < n; ++t) {
       out += N;
-      for (std::uint64_t j = 0; j < kBlocks; ++j) {
-        const __m512i error = _mm512_sub_epi32(step_slots(j, t, w[j]), bias[j]);
-        d[j] = _mm512_mask_add_epi32(error, linear[j], error, d[j]);
-        k[j] = _mm512_add_epi32(k[j], d[j]);
-        _mm512_mask_storeu_ps(out + j * kLaneBlock, store[j], values512(lo, step, k[j]));
-      }
+      end += w;
+      const __m512i error = errors(t, w);
+      d = _mm512_mask_add_epi32(error, linear, error, d);
+      k = _mm512_add_epi32(k, d);
+      _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
     }
   }
 }
@@ -208,16 +191,18 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
 // One step of blocks [b, e) from their states (all at the same step, after step 0).
 void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
-  const std::uint32_t* words = L.words.data();
+  const std::uint32_t* rows = lane_rows(L);
   const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = lane_step_width(L, k, t);
-    __m512i u = slots512(words, s.pos, width);
+    s.pos += width;
+    __m512i error = errors512(rows, s.pos, width);
     if (exception_row_due(L, k, s))
-      u = patch512(L.exception_lanes.data(), L.highs.data(), s.row, s.high, width, u);
+      error = patch512(L.exception_lanes.data(), L.highs.data(), s.row, s.high, width, error);
     const __m512i k1 = _mm512_loadu_si512(s.k1), k2 = _mm512_loadu_si512(s.k2);
-    const __m512i next = next_k512(u, _mm512_set1_epi32(int(offset_bias(width))), t >= 2 ? L.linear[k] : 0, k1, k2);
+    const __m512i trend = _mm512_maskz_sub_epi32(t >= 2 ? L.linear[k] : 0, k1, k2);
+    const __m512i next = _mm512_add_epi32(_mm512_add_epi32(k1, trend), error);
     _mm512_storeu_si512(s.k2, k1);
     _mm512_storeu_si512(s.k1, next);
     ++s.t;

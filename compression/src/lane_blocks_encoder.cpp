@@ -169,7 +169,8 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
   std::uint64_t bits = 0;
   for (const Chunk& c : done) bits += c.bits;
   const std::uint64_t rows = lane_word_rows(bits);
-  L.words.assign((rows + 2) * kLaneBlock, 0);
+  L.words.assign((1 + rows + 2) * kLaneBlock, 0);  // the zero row, the rows, room for the last chunk's carry
+  std::uint32_t* columns = L.words.data() + kLaneBlock;
   std::vector<std::uint8_t> high_bytes;
   BitWriter high_writer(high_bytes);
   std::uint64_t at = 0;
@@ -192,12 +193,12 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
     for (std::uint64_t row = 0; row < used && row * kLaneBlock < c.words.size(); ++row)
       for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
         const std::uint32_t v = c.words[row * kLaneBlock + l];
-        L.words[(base + row) * kLaneBlock + l] |= v << sh;
-        if (sh) L.words[(base + row + 1) * kLaneBlock + l] |= v >> (32 - sh);
+        columns[(base + row) * kLaneBlock + l] |= v << sh;
+        if (sh) columns[(base + row + 1) * kLaneBlock + l] |= v >> (32 - sh);
       }
     at += c.bits;
   }
-  L.words.resize(rows * kLaneBlock);
+  L.words.resize(lane_words_held(bits));
   L.words.shrink_to_fit();  // as a parsed page holds them: a read past the rows is caught in tests
   high_writer.flush();
   high_bytes.resize(high_bytes.size() + 8, 0);

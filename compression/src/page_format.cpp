@@ -61,7 +61,10 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p) {
       high_bits += std::uint64_t(std::popcount(L.exception_lanes[at])) * lane_exception_width(L, b);
   r.get_array(L.exception_bits, (high_bits + 7) / 8, 8);
   r.get_array(L.raw_values, raw);
-  r.get_array(L.words, kLaneBlock * lane_word_rows(bits));
+  const std::uint64_t words = kLaneBlock * lane_word_rows(bits);
+  if (words > r.remaining() / 4) r.fail("ends inside the lane words");
+  L.words.assign(kLaneBlock + words, 0);  // the zero row, then the file's rows
+  r.take(L.words.data() + kLaneBlock, words * 4);
 }
 
 }  // namespace
@@ -108,7 +111,7 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.put_array(L.exception_lanes);
     w.append(L.exception_bits.data(), L.exception_bits.size() - 8);  // without the read padding
     w.put_array(L.raw_values);
-    w.put_array(L.words);
+    w.append(lane_rows(L), (L.words.size() - kLaneBlock) * 4);  // without the zero row
   }
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();

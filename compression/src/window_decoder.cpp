@@ -337,7 +337,7 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     sized(L.exception_lanes.size(), L.row_start.back(), "exception_lanes");
     sized(L.highs.size(), L.high_start.back(), "highs");
     sized(L.raw_values.size(), L.raw_start.back(), "raw_values");
-    sized(L.words.size(), kLaneBlock * lane_word_rows(L.bit_start.back()), "lane words");
+    sized(L.words.size(), lane_words_held(L.bit_start.back()), "lane words");
   }
 }
 

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "penumbra/compression/codec_params.h"
+#include "penumbra/core/aligned_allocator.h"
 
 namespace penumbra::compression {
 
@@ -46,7 +47,10 @@ struct LaneBlocks {
   std::vector<std::uint16_t> exception_lanes;  ///< per exception row: its lanes (nonzero)
   std::vector<std::uint8_t> exception_bits;    ///< high parts, each block's at its width, LSB first; 8 bytes of padding
   std::vector<float> raw_values;               ///< raw lanes' values, block by block, lane by lane, step by step
-  std::vector<std::uint32_t> words;            ///< rows of 16 words: lane l's bits run down column l; one spare row
+  /// A zero row (in memory only, not in the file), then rows of 16 words: lane l's bits run down
+  /// column l; one spare row. Rows start on cache lines, and the zero row lets a vector decoder
+  /// read the row below any slot's last bit.
+  std::vector<std::uint32_t, AlignedAllocator<std::uint32_t, 64>> words;
   /// Derived when a page is built or parsed, not stored: where each block starts (its bit in
   /// every lane's column, its first exception row, high part and raw value), plus the end, and
   /// the high parts unpacked to 32 bits.
