@@ -139,6 +139,15 @@ inline __m512 values512(__m512 lo, __m512 step, __m512i k) {
   return _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k), step));
 }
 
+// A block's values: a whole vector for a full block (cheaper than a masked store), the real lanes
+// of the last.
+inline void put512(float* out, __mmask16 lanes, __m512 v) {
+  if (lanes == 0xFFFF)
+    _mm512_storeu_ps(out, v);
+  else
+    _mm512_mask_storeu_ps(out, lanes, v);
+}
+
 // One block at a time, all its steps: its state stays in registers (four blocks side by side
 // spilled it, and ran 20 % slower). Each step is two row loads, two shifts, an or, an xor and a
 // shift; an exception row adds its high parts, expanded into their lanes. The block keeps k and
@@ -170,20 +179,20 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     };
     float* out = window + c * kLaneBlock;
     __m512i k = first512(rows, end, fw);
-    _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
+    put512(out, store, values512(lo, step, k));
     if (n < 2) continue;
     out += N;
     end += w1;
     __m512i d = errors(1, w1);
     k = _mm512_add_epi32(k, d);
-    _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
+    put512(out, store, values512(lo, step, k));
     for (std::uint32_t t = 2; t < n; ++t) {
       out += N;
       end += w;
       const __m512i error = errors(t, w);
       d = _mm512_mask_add_epi32(error, linear, error, d);
       k = _mm512_add_epi32(k, d);
-      _mm512_mask_storeu_ps(out, store, values512(lo, step, k));
+      put512(out, store, values512(lo, step, k));
     }
   }
 }
@@ -206,7 +215,7 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
     _mm512_storeu_si512(s.k2, k1);
     _mm512_storeu_si512(s.k1, next);
     ++s.t;
-    _mm512_mask_storeu_ps(out + k * kLaneBlock, lane_block_mask(p.vertex_count, k), values512(lo, step, next));
+    put512(out + k * kLaneBlock, lane_block_mask(p.vertex_count, k), values512(lo, step, next));
   }
 }
 #pragma GCC pop_options
