@@ -103,7 +103,7 @@ inline std::uint32_t next_exception_step(const std::uint16_t* steps, std::uint64
 
 /// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
 /// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
-enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2 };
+enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2, avx512_vbmi2 = 3 };
 LaneIsa lane_isa();
 void cap_lane_isa(LaneIsa widest);
 

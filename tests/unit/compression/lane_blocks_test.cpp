@@ -29,13 +29,13 @@ using testing::crc32_reference;
 struct VectorDecodeGuard {
   ~VectorDecodeGuard() {
     set_vector_decode(true);
-    detail::cap_lane_isa(detail::LaneIsa::avx512);
+    detail::cap_lane_isa(detail::LaneIsa::avx512_vbmi2);
   }
 };
 
 // Window, every step, every vertex's series and a cursor's playback agree bit for bit with the
-// scalar decoders, for each vector decoder this CPU has (AVX-512, AVX2), and every value lies
-// within the page's bound.
+// scalar decoders, for each vector decoder this CPU has (AVX-512 with and without VBMI2, AVX2),
+// and every value lies within the page's bound.
 void expect_paths_agree(const SyntheticField& f, std::uint32_t n, const EncodedPage& page, const std::string& what) {
   VectorDecodeGuard guard;
   const std::uint64_t N = f.vertices;
@@ -46,7 +46,7 @@ void expect_paths_agree(const SyntheticField& f, std::uint32_t n, const EncodedP
   set_vector_decode(true);
   for (std::uint64_t i = 0; i < N * n; ++i)
     ASSERT_LE(std::fabs(double(scalar[i]) - f.values[i]), page.bound) << what << ": value " << i;
-  for (const auto isa : {detail::LaneIsa::avx512, detail::LaneIsa::avx2, detail::LaneIsa::scalar}) {
+  for (const auto isa : {detail::LaneIsa::avx512_vbmi2, detail::LaneIsa::avx512, detail::LaneIsa::avx2, detail::LaneIsa::scalar}) {
     detail::cap_lane_isa(isa);
     const std::string with = what + ", decoders up to " + std::to_string(int(isa));
     decode_window(page, window.data());

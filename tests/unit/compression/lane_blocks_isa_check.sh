@@ -1,0 +1,22 @@
+#!/bin/bash
+# tests/unit/compression/lane_blocks_isa_check.sh LIBRARY -- the AVX-512 lane-block decoders'
+# TwoShifts instances run on CPUs without AVX-512 VBMI2, yet GCC compiles them with VBMI2 allowed
+# (a template takes the target of its definition; see lane_blocks_decoder.cpp). No VBMI2
+# instruction may appear in them, and the FunnelShift instances must still use one (otherwise this
+# check would be looking at the wrong code).
+set -euo pipefail
+command -v objdump >/dev/null || { echo "objdump not found"; exit 1; }
+code=$(objdump -d --no-show-raw-insn -C "$1")
+instances() {  # the disassembly of the avx512_window and avx512_next instances for policy $1
+  awk -v policy="$1" '/^[0-9a-f]+ </ { p = ($0 ~ ("avx512_(window|next)<[^>]*" policy ">")) ; if (p) ++n } p { print } END { if (n != 2) exit 3 }' <<<"$code"
+}
+two=$(instances TwoShifts) || { echo "TwoShifts instances not found in $1"; exit 1; }
+funnel=$(instances FunnelShift) || { echo "FunnelShift instances not found in $1"; exit 1; }
+vbmi2='vpshrd|vpshld|vpcompress[bw]|vpexpand[bw]'
+if grep -qE "$vbmi2" <<<"$two"; then
+  echo "VBMI2 instructions in the decoders for CPUs without VBMI2:"
+  grep -E "$vbmi2" <<<"$two" | head
+  exit 1
+fi
+grep -qE 'vpshrdv' <<<"$funnel" || { echo "the FunnelShift instances use no funnel shift"; exit 1; }
+echo "TwoShifts instances: no VBMI2 instruction; FunnelShift instances: $(grep -cE 'vpshrdv' <<<"$funnel") funnel shifts"
