@@ -150,7 +150,8 @@ inline void put512(float* out, __mmask16 lanes, __m512 v) {
 struct FunnelShift {
   static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
     const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
-    return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), _mm512_set1_epi32(int(end & 31)));
+    const __m512i shift = _mm512_set1_epi32(int(end & 31));
+    return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), shift);
   }
 };
 
@@ -170,12 +171,12 @@ __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wi
 }
 
 // One block at a time, all its steps: its state stays in registers (four blocks side by side
-// spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, two shifts, an or, an xor and a
-// shift; an exception row adds its high parts, expanded into their lanes. The block keeps k and
-// its last difference d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the
-// error, the others' the error alone (one masked add), the same integers as k_{t-1} + prediction
-// error. Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add
-// that are never fused.
+// spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, joined by a
+// funnel shift (or two shifts and an or), an xor and a shift; an exception row adds its high
+// parts, expanded into their lanes. The block keeps k and its last difference d = k_t - k_{t-1}:
+// the extrapolating lanes' next difference is d plus the error, the others' the error alone (one
+// masked add), the same integers as k_{t-1} + prediction error. Bit-identical to lane_block_step:
+// the same wrapping integers, then a multiply and an add that are never fused.
 template <class Bits>
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;
