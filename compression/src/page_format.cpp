@@ -1,6 +1,7 @@
 // compression/src/page_format.cpp
 #include "page_format.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -111,7 +112,8 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.put_array(L.exception_lanes);
     w.append(L.exception_bits.data(), L.exception_bits.size() - 8);  // without the read padding
     w.put_array(L.raw_values);
-    w.append(lane_rows(L), (L.words.size() - kLaneBlock) * 4);  // without the zero row
+    // Without the zero row (a page reaches here validated; the max only keeps a bad one in bounds).
+    w.append(lane_rows(L), (std::max<std::size_t>(L.words.size(), kLaneBlock) - kLaneBlock) * 4);
   }
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();
