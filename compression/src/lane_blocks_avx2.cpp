@@ -19,8 +19,8 @@ namespace {
 constexpr std::uint64_t kHalf = kLaneBlock / 2;
 
 // One block's `width`-bit slots at bit `pos`, as lanes 0-7 and 8-15, moving pos on.
-inline void slots256(const std::uint32_t* words, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
-  const std::uint32_t* r = words + (pos >> 5) * kLaneBlock;
+inline void slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+  const std::uint32_t* r = rows + (pos >> 5) * kLaneBlock;
   const __m128i right = _mm_cvtsi32_si128(int(pos & 31)), left = _mm_cvtsi32_si128(int(32 - (pos & 31)));
   const __m256i mask = _mm256_set1_epi32(int(low_mask(width)));
   pos += width;
@@ -70,7 +70,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
-  const std::uint32_t* words = lane_rows(L);
+  const std::uint32_t* rows = lane_rows(L);
   const std::uint16_t* exception_steps = L.exception_steps.data();
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t c = b; c < e; ++c) {
@@ -83,7 +83,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
     __m256i k[2], d[2];
     // The prediction errors at step t, with the block's exception row's high parts if it has one.
     const auto errors = [&](std::uint32_t t, std::uint32_t width, __m256i offset, __m256i u[2]) {
-      slots256(words, pos, width, u);
+      slots256(rows, pos, width, u);
       if (next == t) {
         patch256(L, row, high, width, u);
         next = next_exception_step(exception_steps, row, row_end);
@@ -96,7 +96,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
       put256(v, lanes, row_out);
     };
     float* out = window + c * kLaneBlock;
-    slots256(words, pos, fw, k);
+    slots256(rows, pos, fw, k);
     put(out);
     if (n >= 2) {
       out += N;
@@ -119,13 +119,13 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
 
 void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
-  const std::uint32_t* words = lane_rows(L);
+  const std::uint32_t* rows = lane_rows(L);
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = lane_step_width(L, k, t);
     __m256i u[2];
-    slots256(words, s.pos, width, u);
+    slots256(rows, s.pos, width, u);
     if (exception_row_due(L, k, s)) patch256(L, s.row, s.high, width, u);
     const __m256i bias = _mm256_set1_epi32(int(offset_bias(width)));
     const std::uint32_t linear = t >= 2 ? L.linear[k] : 0;

@@ -66,6 +66,16 @@ void expect_paths_agree(const SyntheticField& f, std::uint32_t n, const EncodedP
   }
 }
 
+// The page as the file holds it, parsed back: its words then have no spare capacity (the
+// sanitizer build catches a read past them) and its zero row is the parser's.
+EncodedPage through_page_bytes(const EncodedPage& page) {
+  const auto bytes = detail::serialize_page(page, 0);
+  detail::PageHeader header;
+  EXPECT_TRUE(detail::parse_page_header(bytes.data(), header));
+  return detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, page.vertex_count, page.window,
+                                    page.codebook_size, "test page", std::uint32_t(PageMethod::predictive_lanes));
+}
+
 TEST(LaneBlocks, EveryPathHoldsTheBoundOnHardWindows) {
   auto noise = testing::white_noise(1003, 40);  // 62 full blocks and a last one of 11 lanes
   testing::add_outliers(noise);
@@ -93,9 +103,9 @@ TEST(LaneBlocks, ValuesTheQuantiserCannotHoldAreStoredExactly) {
 
 TEST(LaneBlocks, ZeroWidthStepsAtTheVeryEndOfTheColumnsStayInside) {
   // Two blocks of a constant field with 16-bit k_0 and no differences: 32 bits per column, so the
-  // last block's zero-width steps sit exactly at the end of the columns, where every slot read
-  // still loads the row after its own. The page goes through a file's bytes so that its words
-  // have no spare capacity (the sanitizer build catches a read past them).
+  // last block's zero-width steps sit exactly at the end of the columns, where the scalar slot
+  // read still loads the row after its own. The page goes through a file's bytes so that its
+  // words have no spare capacity (the sanitizer build catches a read past them).
   constexpr std::uint64_t N = 32;
   constexpr std::uint32_t n = 3;
   const float bound = 1e-3f, step = 2 * bound;
@@ -118,14 +128,8 @@ TEST(LaneBlocks, ZeroWidthStepsAtTheVeryEndOfTheColumnsStayInside) {
   ASSERT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
   ASSERT_EQ(page.lanes.bit_start.back(), 32u);
   validate_page(page);
-  const auto bytes = detail::serialize_page(page, 0);
-  detail::PageHeader header;
-  ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
-  const EncodedPage parsed = detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, N,
-                                                        page.window, page.codebook_size, "test page",
-                                                        std::uint32_t(PageMethod::predictive_lanes));
   SyntheticField f{N, n, std::vector<float>(N * n, 1000 * step), page.times};
-  expect_paths_agree(f, n, parsed, "constant blocks ending on a row");
+  expect_paths_agree(f, n, through_page_bytes(page), "constant blocks ending on a row");
 }
 
 TEST(LaneBlocks, WordsStartOnACacheLineAfterAZeroRowTheFileLeavesOut) {
@@ -135,11 +139,7 @@ TEST(LaneBlocks, WordsStartOnACacheLineAfterAZeroRowTheFileLeavesOut) {
   const auto aligned = [](const EncodedPage& p) { return reinterpret_cast<std::uintptr_t>(p.lanes.words.data()) % 64 == 0; };
   EXPECT_TRUE(aligned(page));
   for (std::uint64_t i = 0; i < detail::kLaneBlock; ++i) ASSERT_EQ(page.lanes.words[i], 0u) << i;
-  const auto bytes = detail::serialize_page(page, 0);
-  detail::PageHeader header;
-  ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
-  const EncodedPage parsed = detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, 200, page.window,
-                                                        page.codebook_size, "test page", std::uint32_t(PageMethod::predictive_lanes));
+  const EncodedPage parsed = through_page_bytes(page);
   // The parser rejects bytes after the payload's last table, so the file held the rows alone;
   // the parsed page has its zero row back.
   EXPECT_TRUE(aligned(parsed));
