@@ -232,15 +232,10 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index)
   if (detail::crc32(payload, h.payload_bytes) != h.payload_crc)
     throw Error(ErrorCode::io_error, name + ": checksum mismatch (the page is corrupt)");
   return std::make_shared<const EncodedPage>(detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window,
-                                                                        m_info.codebook_size, name, max_method()));
+                                                                        m_info.codebook_size, name, m_version));
 }
 
-std::uint32_t CompressedField::max_method() const {
-  // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods,
-  // version 3 predictive_lanes.
-  if (m_version >= 3) return detail::kMaxMethod;
-  return m_version >= 2 ? std::uint32_t(PageMethod::vq_aligned_residual) : std::uint32_t(PageMethod::predictive);
-}
+std::uint32_t CompressedField::max_method() const { return detail::max_method_of_version(m_version); }
 
 void CompressedField::read_step(std::uint64_t step, float* out) const {
   const std::size_t p = page_of_step(step);

@@ -6,14 +6,18 @@
 // word 16 r + l holds lane l's bits 32 r .. 32 r + 31, LSB first. A block starts at the same bit
 // bit_start[b] of every column and holds there, in each lane, for a page of n steps:
 //   k_0         first_width bits (the page's), k_0 itself
-//   step 1      w1 bits: k_1 - k_0 + 2^(w1-1)  (offset binary; width 0: the difference is 0)
-//   step t >= 2 w bits each: k_t - prediction_t + 2^(w-1), the prediction being
+//   step 1      w1 bits: k_1 - k_0 in two's complement (width 0: the difference is 0)
+//   step t >= 2 k_t - prediction_t in v bits, two's complement: v = w2 for the transient steps
+//               2 .. kLaneTransientEnd - 1, v = w after them; the prediction is
 //               2 k_{t-1} - k_{t-2} in `linear` lanes and k_{t-1} in the others
-// Blocks follow each other without gaps, so a block takes first_width + w1 + (n-2) w bits of
-// each column (fewer for n < 3). A run's first step often jumps, so it has a width of its own.
-// A difference too wide for its step's width is an exception: the block lists the step's row
-// (step, lanes), and the high part h = floor((d + bias) / 2^width), zigzag-coded at the block's
-// exception width x, follows in exception_bits; the slot holds the low bits. Raw lanes (values
+// Blocks follow each other without gaps (lane_block_bits gives a block's bits). A run's first
+// steps often jump further than its later ones, so step 1 and the transient steps have widths of
+// their own. A difference d too wide for its step's width is an exception: the block lists the
+// step's row (step, lanes), and the high part h = (d - s) / 2^width, s being the slot's low
+// bits as a signed value, zigzag-coded at the block's exception width x, follows in
+// exception_bits. (Format version 3 had no transient width, and its slots held d + 2^(v-1),
+// offset binary, with the same high parts: its pages are read with w2 = w and each slot's top
+// bit flipped, see flip_lane_slot_signs.) Raw lanes (values
 // that lo + k step cannot hold within the bound) read 0 in every slot and take their n exact
 // floats from raw_values. All integer arithmetic wraps in 32 bits, so that the scalar and the
 // vector decoders agree exactly.
@@ -56,17 +60,35 @@ inline std::uint16_t lane_block_mask(std::uint64_t vertices, std::uint64_t b) {
   return std::uint16_t(lanes == kLaneBlock ? 0xFFFF : (1u << lanes) - 1);
 }
 
-inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b]; }
-inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 1]; }
-inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[3 * b + 2]; }
+/// The steps after step 1 that take the transient width w2: 2 .. kLaneTransientEnd - 1.
+constexpr std::uint32_t kLaneTransientEnd = 6;
+
+/// A block's widths, in this order: step 1's, the transient steps', the later steps', the high
+/// parts'. Format version 3 stored three, without the transient one.
+constexpr std::uint64_t kLaneWidths = 4;
+inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b]; }
+inline std::uint32_t lane_width_2(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 1]; }
+inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 2]; }
+inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 3]; }
+
+/// Steps of an n-step page at the transient width, and after it.
+inline std::uint32_t lane_transient_steps(std::uint32_t steps) {
+  return std::min(steps, kLaneTransientEnd) - std::min(steps, 2u);
+}
+inline std::uint32_t lane_later_steps(std::uint32_t steps) { return steps - std::min(steps, kLaneTransientEnd); }
 
 /// Bits a block takes in each column.
-inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1, std::uint32_t w, std::uint32_t steps) {
-  return first_width + (steps >= 2 ? w1 : 0) + (steps >= 3 ? std::uint64_t(steps - 2) * w : 0);
+inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1, std::uint32_t w2, std::uint32_t w,
+                                     std::uint32_t steps) {
+  return first_width + (steps >= 2 ? w1 : 0) + std::uint64_t(lane_transient_steps(steps)) * w2 +
+         std::uint64_t(lane_later_steps(steps)) * w;
 }
 
 inline std::uint32_t low_mask(std::uint32_t width) { return width >= 32 ? ~0u : (1u << width) - 1; }
-inline std::uint32_t offset_bias(std::uint32_t width) { return width ? 1u << (width - 1) : 0u; }
+/// The `width`-bit two's-complement value u (width 0: 0), in 32 bits.
+inline std::uint32_t sign_extend(std::uint32_t u, std::uint32_t width) {
+  return width ? std::uint32_t(std::int32_t(u << (32 - width)) >> (32 - width)) : 0u;
+}
 
 /// Lane l's `width` bits at bit `pos` of its column (`rows`: row 0; the spare row makes word
 /// row + 1 readable).
@@ -87,7 +109,7 @@ struct LaneBlockState {
 
 /// The width of block b's slots at step t >= 1.
 inline std::uint32_t lane_step_width(const LaneBlocks& L, std::uint64_t b, std::uint32_t t) {
-  return t == 1 ? lane_width_1(L, b) : lane_width(L, b);
+  return t == 1 ? lane_width_1(L, b) : t < kLaneTransientEnd ? lane_width_2(L, b) : lane_width(L, b);
 }
 
 /// True when block b's next exception row (from state s) is at the step s is about to decode.
@@ -136,10 +158,13 @@ void lane_blocks_vertex(const EncodedPage& p, std::uint64_t v, float* out);
 
 /// Encodes a window of N vertices into lane blocks. gather(first, count, x) writes vertices
 /// [first, first + count) to x, `window` floats each (the first `steps` meaningful). The
-/// derived tables are left empty: lane_blocks_error derives them, as for a parsed page.
+/// derived tables are left empty: lane_blocks_error derives them, as for a parsed page. Without
+/// `transient_width`, the transient steps take the later steps' width (w2 = w, the layout format
+/// version 3 can hold).
 LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
                              float bound, std::uint32_t first_width,
-                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather);
+                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather,
+                             bool transient_width = true);
 
 /// Checks a predictive_lanes page's tables value by value (they must describe exactly the bits
 /// and values stored, within their arrays) and derives bit_start, raw_start, row_start,

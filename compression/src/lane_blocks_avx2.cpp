@@ -18,17 +18,32 @@ namespace {
 
 constexpr std::uint64_t kHalf = kLaneBlock / 2;
 
-// One block's `width`-bit slots at bit `pos`, as lanes 0-7 and 8-15, moving pos on.
-inline void slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+// One block's 32 bits from bit `pos` on, as lanes 0-7 and 8-15: a slot there is their low bits.
+inline void bits_from256(const std::uint32_t* rows, std::uint64_t pos, __m256i u[2]) {
   const std::uint32_t* r = rows + (pos >> 5) * kLaneBlock;
   const __m128i right = _mm_cvtsi32_si128(int(pos & 31)), left = _mm_cvtsi32_si128(int(32 - (pos & 31)));
-  const __m256i mask = _mm256_set1_epi32(int(low_mask(width)));
-  pos += width;
   for (std::uint64_t h = 0; h < 2; ++h) {
     const __m256i low = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + h * kHalf));
     const __m256i high = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + kLaneBlock + h * kHalf));
-    u[h] = _mm256_and_si256(_mm256_or_si256(_mm256_srl_epi32(low, right), _mm256_sll_epi32(high, left)), mask);
+    u[h] = _mm256_or_si256(_mm256_srl_epi32(low, right), _mm256_sll_epi32(high, left));
   }
+}
+
+// The unsigned `width`-bit slots at bit `pos` (k_0), moving pos on.
+inline void unsigned_slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+  const __m256i mask = _mm256_set1_epi32(int(low_mask(width)));
+  bits_from256(rows, pos, u);
+  pos += width;
+  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_and_si256(u[h], mask);
+}
+
+// The two's-complement `width`-bit slots at bit `pos`, sign-extended (a shift left by 32 leaves
+// zeros: width 0), moving pos on.
+inline void signed_slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+  const __m128i spare = _mm_cvtsi32_si128(int(32 - width));
+  bits_from256(rows, pos, u);
+  pos += width;
+  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sra_epi32(_mm256_sll_epi32(u[h], spare), spare);
 }
 
 // Adds exception row `row`'s high parts to its lanes of u, moving row and high on (rare: lane by
@@ -75,20 +90,18 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
   const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
   for (std::uint64_t c = b; c < e; ++c) {
     const std::uint64_t lanes = lane_block_lanes(N, c), row_end = L.row_start[c + 1];
-    const std::uint32_t w1 = lane_width_1(L, c), w = lane_width(L, c);
+    const std::uint32_t w1 = lane_width_1(L, c);
     const __m256i linear[2] = {lane_mask(L.linear[c], 0), lane_mask(L.linear[c], 1)};
-    const __m256i bias = _mm256_set1_epi32(int(offset_bias(w)));
     std::uint64_t pos = L.bit_start[c], row = L.row_start[c], high = L.high_start[c];
     std::uint32_t next = next_exception_step(exception_steps, row, row_end);
-    __m256i k[2], d[2];
+    __m256i k[2], d[2] = {_mm256_setzero_si256(), _mm256_setzero_si256()};  // d: only read after step 1 sets it
     // The prediction errors at step t, with the block's exception row's high parts if it has one.
-    const auto errors = [&](std::uint32_t t, std::uint32_t width, __m256i offset, __m256i u[2]) {
-      slots256(rows, pos, width, u);
+    const auto errors = [&](std::uint32_t t, std::uint32_t width, __m256i u[2]) {
+      signed_slots256(rows, pos, width, u);
       if (next == t) {
         patch256(L, row, high, width, u);
         next = next_exception_step(exception_steps, row, row_end);
       }
-      for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sub_epi32(u[h], offset);
     };
     const auto put = [&](float* row_out) {
       const __m256 v[2] = {_mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[0]), step)),
@@ -96,24 +109,30 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
       put256(v, lanes, row_out);
     };
     float* out = window + c * kLaneBlock;
-    slots256(rows, pos, fw, k);
+    unsigned_slots256(rows, pos, fw, k);
     put(out);
     if (n >= 2) {
       out += N;
-      errors(1, w1, _mm256_set1_epi32(int(offset_bias(w1))), d);
+      errors(1, w1, d);
       for (std::uint64_t h = 0; h < 2; ++h) k[h] = _mm256_add_epi32(k[h], d[h]);
       put(out);
     }
-    for (std::uint32_t t = 2; t < n; ++t) {
-      out += N;
-      __m256i error[2];
-      errors(t, w, bias, error);
-      for (std::uint64_t h = 0; h < 2; ++h) {
-        d[h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[h], linear[h]));
-        k[h] = _mm256_add_epi32(k[h], d[h]);
+    // The transient steps, then the later ones: one width each.
+    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w) {
+      for (std::uint32_t t = from; t < to; ++t) {
+        out += N;
+        __m256i error[2];
+        errors(t, w, error);
+        for (std::uint64_t h = 0; h < 2; ++h) {
+          d[h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[h], linear[h]));
+          k[h] = _mm256_add_epi32(k[h], d[h]);
+        }
+        put(out);
       }
-      put(out);
-    }
+    };
+    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
+    steps(2, transient_end, lane_width_2(L, c));
+    steps(transient_end, n, lane_width(L, c));
   }
 }
 
@@ -125,9 +144,8 @@ void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, Lane
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = lane_step_width(L, k, t);
     __m256i u[2];
-    slots256(rows, s.pos, width, u);
+    signed_slots256(rows, s.pos, width, u);
     if (exception_row_due(L, k, s)) patch256(L, s.row, s.high, width, u);
-    const __m256i bias = _mm256_set1_epi32(int(offset_bias(width)));
     const std::uint32_t linear = t >= 2 ? L.linear[k] : 0;
     __m256 v[2];
     for (std::uint64_t h = 0; h < 2; ++h) {
@@ -135,7 +153,7 @@ void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, Lane
       __m256i* k2 = reinterpret_cast<__m256i*>(s.k2 + h * kHalf);
       const __m256i last = _mm256_loadu_si256(k1), before = _mm256_loadu_si256(k2);
       const __m256i trend = _mm256_and_si256(_mm256_sub_epi32(last, before), lane_mask(linear, h));
-      const __m256i next = _mm256_add_epi32(_mm256_add_epi32(last, trend), _mm256_sub_epi32(u[h], bias));
+      const __m256i next = _mm256_add_epi32(_mm256_add_epi32(last, trend), u[h]);
       _mm256_storeu_si256(k2, last);
       _mm256_storeu_si256(k1, next);
       v[h] = _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(next), step));

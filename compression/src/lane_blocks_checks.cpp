@@ -19,7 +19,7 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   const std::uint32_t n = p.step_count;
   if (p.first_width < 1 || p.first_width > 31) return "first-value width " + std::to_string(p.first_width) + " outside 1..31";
   if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
-  if (L.widths.size() != 3 * B || L.linear.size() != B || L.raw.size() != B || L.exception_rows.size() != B)
+  if (L.widths.size() != kLaneWidths * B || L.linear.size() != B || L.raw.size() != B || L.exception_rows.size() != B)
     return "lane block tables do not have one entry per block of 16 vertices";
   LaneBlocks d;
   d.bit_start.resize(B + 1);
@@ -32,13 +32,15 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
     d.raw_start[b] = raw;
     d.row_start[b] = rows;
     d.high_start[b] = highs;
-    const std::uint32_t w1 = lane_width_1(L, b), w = lane_width(L, b), x = lane_exception_width(L, b);
-    if (w1 > 32 || w > 32 || x > 32) return at_block("width over 32 bits", b);
-    if ((n < 2 && w1 != 0) || (n < 3 && w != 0)) return at_block("width for a step the page does not have", b);
+    const std::uint32_t w1 = lane_width_1(L, b), w2 = lane_width_2(L, b), w = lane_width(L, b);
+    const std::uint32_t x = lane_exception_width(L, b);
+    if (w1 > 32 || w2 > 32 || w > 32 || x > 32) return at_block("width over 32 bits", b);
+    if ((n < 2 && w1 != 0) || (!lane_transient_steps(n) && w2 != 0) || (!lane_later_steps(n) && w != 0))
+      return at_block("width for a step the page does not have", b);
     // Lanes past the last vertex are padding: nothing may be stored for them.
     const std::uint16_t mask = lane_block_mask(N, b);
     if ((L.linear[b] & ~mask) || (L.raw[b] & ~mask)) return at_block("predictor or raw flag on a padding lane", b);
-    bits += lane_block_bits(p.first_width, w1, w, n);
+    bits += lane_block_bits(p.first_width, w1, w2, w, n);
     raw += std::uint64_t(std::popcount(L.raw[b])) * n;
     const std::uint64_t row_end = rows + L.exception_rows[b];
     if (row_end > L.exception_steps.size() || row_end > L.exception_lanes.size())

@@ -31,18 +31,17 @@ void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) {
     return;
   }
   const std::uint32_t width = lane_step_width(L, b, t);
-  std::uint32_t u[kLaneBlock];
-  for (std::uint32_t l = 0; l < kLaneBlock; ++l) u[l] = lane_slot(rows, s.pos, l, width);
+  std::uint32_t error[kLaneBlock];
+  for (std::uint32_t l = 0; l < kLaneBlock; ++l) error[l] = sign_extend(lane_slot(rows, s.pos, l, width), width);
   if (exception_row_due(L, b, s)) {
     for (std::uint32_t lanes = L.exception_lanes[s.row++]; lanes; lanes &= lanes - 1)
-      u[std::countr_zero(lanes)] += std::uint32_t(std::uint64_t(L.highs[s.high++]) << width);
+      error[std::countr_zero(lanes)] += std::uint32_t(std::uint64_t(L.highs[s.high++]) << width);
   }
-  const std::uint32_t bias = offset_bias(width);
   const std::uint16_t linear = t >= 2 ? L.linear[b] : 0;
   for (std::uint32_t l = 0; l < kLaneBlock; ++l) {
     const std::uint32_t prediction = (linear >> l & 1) ? 2u * s.k1[l] - s.k2[l] : s.k1[l];
     s.k2[l] = s.k1[l];
-    s.k1[l] = prediction + (u[l] - bias);
+    s.k1[l] = prediction + error[l];
   }
   s.pos += width;
   ++s.t;
@@ -103,8 +102,8 @@ std::atomic<int> g_lane_isa_cap{int(LaneIsa::avx512_vbmi2)};
 #pragma GCC target("avx512f")
 // The 32 bits of every lane's column that end at bit `end`: from the row `end` lies in and the row
 // below it (the page's zero row below row 0). A slot of width w that ends there is their top w
-// bits, so one arithmetic shift both extracts it and extends its sign: no mask, no bias. Two
-// shifts and an or, for any AVX-512 CPU.
+// bits, so one arithmetic shift both extracts it and extends its sign: no mask. Two shifts and
+// an or, for any AVX-512 CPU.
 struct TwoShifts {
   static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
     const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
@@ -162,19 +161,18 @@ __m512i first512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wid
   return _mm512_srl_epi32(Bits::bits_ending(rows, end), _mm_cvtsi32_si128(int(32 - width)));
 }
 
-// The prediction errors in the `width`-bit slots ending at `end`. A slot holds error + 2^(w-1)
-// (offset binary): with its top bit flipped it is the error in two's complement.
+// The prediction errors in the `width`-bit two's-complement slots ending at `end`.
 template <class Bits>
 __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t width) {
   if (width == 0) return _mm512_setzero_si512();
-  const __m512i x = _mm512_xor_si512(Bits::bits_ending(rows, end), _mm512_set1_epi32(std::int32_t(0x80000000u)));
-  return _mm512_sra_epi32(x, _mm_cvtsi32_si128(int(32 - width)));
+  return _mm512_sra_epi32(Bits::bits_ending(rows, end), _mm_cvtsi32_si128(int(32 - width)));
 }
 
 // One block at a time, all its steps: its state stays in registers (four blocks side by side
 // spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, joined by a
-// funnel shift (or two shifts and an or), an xor and a shift; an exception row adds its high
-// parts, expanded into their lanes. The block keeps k and its last difference d = k_t - k_{t-1}:
+// funnel shift (or two shifts and an or) and an arithmetic shift; an exception row adds its high
+// parts, expanded into their lanes. The transient steps and the later ones each run a loop of
+// their own, so that a step's width stays in a register. The block keeps k and its last difference d = k_t - k_{t-1}:
 // the extrapolating lanes' next difference is d plus the error, the others' the error alone (one
 // masked add), the same integers as k_{t-1} + prediction error. Bit-identical to lane_block_step:
 // the same wrapping integers, then a multiply and an add that are never fused.
@@ -189,7 +187,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
   const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t c = b; c < e; ++c) {
     const __mmask16 store = lane_block_mask(N, c), linear = L.linear[c];
-    const std::uint32_t w1 = lane_width_1(L, c), w = lane_width(L, c);
+    const std::uint32_t w1 = lane_width_1(L, c);
     const std::uint64_t row_end = L.row_start[c + 1];
     std::uint64_t end = L.bit_start[c] + fw, row = L.row_start[c], high = L.high_start[c];
     std::uint32_t next = next_exception_step(exception_steps, row, row_end);  // 0: no exception row left
@@ -210,14 +208,20 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     __m512i d = errors(1, w1);
     k = _mm512_add_epi32(k, d);
     put512(out, store, values512(lo, step, k));
-    for (std::uint32_t t = 2; t < n; ++t) {
-      out += N;
-      end += w;
-      const __m512i error = errors(t, w);
-      d = _mm512_mask_add_epi32(error, linear, error, d);
-      k = _mm512_add_epi32(k, d);
-      put512(out, store, values512(lo, step, k));
-    }
+    // The transient steps, then the later ones: one width each.
+    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w) {
+      for (std::uint32_t t = from; t < to; ++t) {
+        out += N;
+        end += w;
+        const __m512i error = errors(t, w);
+        d = _mm512_mask_add_epi32(error, linear, error, d);
+        k = _mm512_add_epi32(k, d);
+        put512(out, store, values512(lo, step, k));
+      }
+    };
+    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
+    steps(2, transient_end, lane_width_2(L, c));
+    steps(transient_end, n, lane_width(L, c));
   }
 }
 

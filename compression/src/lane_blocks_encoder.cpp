@@ -12,7 +12,7 @@ namespace penumbra::compression::detail {
 
 namespace {
 
-// Bits of an offset-binary slot that holds d: -2^(w-1) <= d < 2^(w-1); width 0 holds only 0.
+// Bits of a two's-complement slot that holds d: -2^(w-1) <= d < 2^(w-1); width 0 holds only 0.
 std::uint32_t signed_width(std::int32_t d) {
   return d == 0 ? 0u : bit_width(std::uint32_t(d ^ (d >> 31))) + 1;
 }
@@ -39,11 +39,39 @@ struct Chunk {
 
 constexpr std::uint64_t kChunkBlocks = 64;
 
-// The page's quantiser (k = round((x - lo) / step), held within `bound`) and shape.
+// The page's quantiser (k = round((x - lo) / step), held within `bound`), shape and layout.
 struct Quantiser {
   std::uint32_t steps, window, first_width;
   float lo, step, bound;
+  bool transient_width;
 };
+
+// The width for steps [a, e) of a block's errors d[l * n + t] with the fewest bits, counting each
+// exception row (32 bits) and high part (at most wmax - w + 1 bits); 0 for no steps.
+std::uint32_t cheapest_width(const std::int32_t* d, std::uint32_t n, std::uint32_t a, std::uint32_t e) {
+  if (e <= a) return 0;
+  std::uint64_t histogram[34] = {}, step_max[34] = {};
+  std::uint32_t wmax = 0;
+  for (std::uint32_t t = a; t < e; ++t) {
+    std::uint32_t m = 0;
+    for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
+      const std::uint32_t s = signed_width(d[l * n + t]);
+      ++histogram[s];
+      m = std::max(m, s);
+    }
+    ++step_max[m];
+    wmax = std::max(wmax, m);
+  }
+  std::uint32_t w = wmax;
+  std::uint64_t best = ~0ull;
+  for (std::uint32_t c_w = 0; c_w <= wmax; ++c_w) {
+    std::uint64_t exceptions = 0, rows = 0;
+    for (std::uint32_t s = c_w + 1; s <= wmax; ++s) exceptions += histogram[s], rows += step_max[s];
+    const std::uint64_t bits = kLaneBlock * std::uint64_t(e - a) * c_w + 32 * rows + exceptions * (wmax - c_w + 1);
+    if (bits < best) best = bits, w = c_w;
+  }
+  return w;
+}
 
 // Encodes one block of `lanes` vertices (x: their windows, q.window floats apart) into c.
 void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk& c, std::vector<std::int32_t>& d,
@@ -84,31 +112,14 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
       d[l * n + t] = std::int32_t(kk[t] - prediction);
     }
   }
-  // Step 1 gets the width of its widest lane; the later steps the width with the fewest bits,
-  // counting each exception row (32 bits) and high part (at most wmax - w + 1 bits).
-  std::uint32_t w1 = 0, wmax = 0;
-  std::uint64_t histogram[34] = {}, step_max[34] = {};
+  // Step 1 gets the width of its widest lane, the transient and the later steps each the width
+  // with the fewest bits over their steps.
+  std::uint32_t w1 = 0;
   if (n >= 2)
     for (std::uint64_t l = 0; l < kLaneBlock; ++l) w1 = std::max(w1, signed_width(d[l * n + 1]));
-  for (std::uint32_t t = 2; t < n; ++t) {
-    std::uint32_t m = 0;
-    for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
-      const std::uint32_t s = signed_width(d[l * n + t]);
-      ++histogram[s];
-      m = std::max(m, s);
-    }
-    ++step_max[m];
-    wmax = std::max(wmax, m);
-  }
-  std::uint32_t w = wmax;
-  std::uint64_t best = ~0ull;
-  for (std::uint32_t c_w = 0; c_w <= wmax; ++c_w) {
-    std::uint64_t exceptions = 0, rows = 0;
-    for (std::uint32_t s = c_w + 1; s <= wmax; ++s) exceptions += histogram[s], rows += step_max[s];
-    const std::uint64_t bits = kLaneBlock * std::uint64_t(n - 2) * c_w + 32 * rows + exceptions * (wmax - c_w + 1);
-    if (bits < best) best = bits, w = c_w;
-  }
-  if (n < 3) w = 0;
+  const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
+  const std::uint32_t w2 = cheapest_width(d.data(), n, 2, q.transient_width ? transient_end : n);
+  const std::uint32_t w = !lane_later_steps(n) ? 0 : q.transient_width ? cheapest_width(d.data(), n, transient_end, n) : w2;
   // Slots, exception rows and high parts.
   std::uint64_t pos = c.bits;
   for (std::uint64_t l = 0; l < kLaneBlock; ++l) c.put(std::uint32_t(l), pos, fw, k0[l]);
@@ -116,15 +127,16 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
   std::uint32_t high_width = 0;
   const std::size_t rows_before = c.exception_steps.size();
   for (std::uint32_t t = 1; t < n; ++t) {
-    const std::uint32_t width = t == 1 ? w1 : w, bias = offset_bias(width);
+    const std::uint32_t width = t == 1 ? w1 : t < kLaneTransientEnd ? w2 : w;
     std::uint16_t lanes = 0;
     for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
-      const std::int64_t v = std::int64_t(d[l * n + t]) + bias;
-      const std::uint32_t low = std::uint32_t(v) & low_mask(width);
+      const std::int32_t error = d[l * n + t];
+      const std::uint32_t low = std::uint32_t(error) & low_mask(width);
       c.put(std::uint32_t(l), pos, width, low);
-      if (signed_width(d[l * n + t]) > width) {
-        // Exact: v - low is a multiple of 2^width (width < 32 here).
-        const std::int32_t high = std::int32_t((v - std::int64_t(low)) >> width);
+      if (signed_width(error) > width) {
+        // Exact: error minus its signed low bits is a multiple of 2^width (width < 32 here).
+        const std::int64_t rest = std::int64_t(error) - std::int32_t(sign_extend(low, width));
+        const std::int32_t high = std::int32_t(rest >> width);
         lanes |= std::uint16_t(1u << l);
         c.highs.push_back(zigzag(high));
         high_width = std::max(high_width, bit_width(zigzag(high)));
@@ -137,7 +149,7 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
     pos += width;
   }
   c.exception_rows.push_back(std::uint16_t(c.exception_steps.size() - rows_before));
-  c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(w), std::uint8_t(high_width)});
+  c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(w2), std::uint8_t(w), std::uint8_t(high_width)});
   c.linear.push_back(linear);
   c.raw.push_back(raw);
   c.bits = pos;
@@ -147,9 +159,10 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
 
 LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
                              float bound, std::uint32_t first_width,
-                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather) {
+                             const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather,
+                             bool transient_width) {
   const std::uint64_t B = lane_block_count(N), chunks = (B + kChunkBlocks - 1) / kChunkBlocks;
-  const Quantiser q{steps, window, first_width, lo, step, bound};
+  const Quantiser q{steps, window, first_width, lo, step, bound, transient_width};
   std::vector<Chunk> done(chunks);
   parallel_for(chunks, 1, [&](std::size_t c0, std::size_t c1) {
     thread_local std::vector<float> x;
@@ -184,7 +197,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
     L.raw_values.insert(L.raw_values.end(), c.raw_values.begin(), c.raw_values.end());
     std::size_t h = 0, r = 0;
     for (std::size_t b = 0; b < c.linear.size(); ++b) {
-      const std::uint32_t x = c.widths[3 * b + 2];
+      const std::uint32_t x = c.widths[kLaneWidths * b + 3];
       for (std::uint32_t e = 0; e < c.exception_rows[b]; ++e, ++r)
         for (int lane = std::popcount(c.exception_lanes[r]); lane > 0; --lane) high_writer.put(c.highs[h++], x);
     }

@@ -10,6 +10,7 @@
 #include "lane_blocks.h"
 #include "page_checks.h"
 #include "page_methods.h"
+#include "penumbra/core/error.h"
 #include "predictive_layout.h"
 #include "vertex_section.h"
 
@@ -37,12 +38,68 @@ void get_quantiser(ByteReader& r, EncodedPage& p) {
 
 // The tables of a predictive_lanes page in their stored order; each variable-length table's
 // size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
-void read_lane_blocks(ByteReader& r, EncodedPage& p) {
+// Format version 3 stored three widths a block: step 1's, one for every later step, the high
+// parts'. In memory its later width serves the transient steps too (and none past them when
+// the page has none).
+constexpr std::uint64_t kVersion3LaneWidths = 3;
+
+void get_lane_widths(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_t steps, std::uint32_t version) {
+  if (version >= 4) return r.get_array(L.widths, kLaneWidths * B);
+  std::vector<std::uint8_t> stored;
+  r.get_array(stored, kVersion3LaneWidths * B);
+  L.widths.resize(kLaneWidths * B);
+  for (std::uint64_t b = 0; b < B; ++b) {
+    const std::uint8_t* s = stored.data() + kVersion3LaneWidths * b;
+    const std::uint8_t later = lane_later_steps(steps) ? s[1] : 0;
+    const std::uint8_t widths[kLaneWidths] = {s[0], s[1], later, s[2]};
+    std::copy(widths, widths + kLaneWidths, L.widths.begin() + std::ptrdiff_t(kLaneWidths * b));
+  }
+}
+
+void put_lane_widths(ByteWriter& w, const EncodedPage& p, std::uint32_t version) {
+  const LaneBlocks& L = p.lanes;
+  if (version >= 4) return w.put_array(L.widths);
+  // The slots are flipped back by the widths: they must describe the words.
+  if (L.bit_start.size() != L.block_count() + 1 || L.words.size() != lane_words_held(L.bit_start.back()))
+    throw Error(ErrorCode::invalid_argument, "lane blocks whose offsets do not match their words");
+  std::vector<std::uint8_t> stored(kVersion3LaneWidths * L.block_count());
+  for (std::uint64_t b = 0; b < L.block_count(); ++b) {
+    const std::uint32_t w2 = lane_width_2(L, b), later = lane_width(L, b);
+    if (lane_later_steps(p.step_count) && later != w2)
+      throw Error(ErrorCode::invalid_argument, "format version 3 cannot hold a lane block's transient width (block " +
+                                                   std::to_string(b) + ")");
+    stored[kVersion3LaneWidths * b] = lane_width_1(L, b) & 0xFF;
+    stored[kVersion3LaneWidths * b + 1] = std::uint8_t(w2);
+    stored[kVersion3LaneWidths * b + 2] = lane_exception_width(L, b) & 0xFF;
+  }
+  w.put_array(stored);
+}
+
+// Flips the top bit of every slot after k_0 in the columns `rows` (row 0; the widths' sums must
+// fit them): that turns format version 3's offset-binary slots into this version's two's
+// complement ones, and back. The high parts stay as they are.
+void flip_lane_slot_signs(const EncodedPage& p, std::uint32_t* rows) {
+  const LaneBlocks& L = p.lanes;
+  std::uint64_t pos = 0;
+  for (std::uint64_t b = 0; b < L.block_count(); ++b) {
+    pos += p.first_width;
+    for (std::uint32_t t = 1; t < p.step_count; ++t) {
+      const std::uint32_t width = lane_step_width(L, b, t);
+      pos += width;
+      if (width == 0) continue;
+      const std::uint64_t top = pos - 1;
+      std::uint32_t* row = rows + (top >> 5) * kLaneBlock;
+      for (std::uint64_t l = 0; l < kLaneBlock; ++l) row[l] ^= 1u << (top & 31);
+    }
+  }
+}
+
+void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   LaneBlocks& L = p.lanes;
   get_quantiser(r, p);
   if (p.first_width < 1 || p.first_width > 31) r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
   const std::uint64_t B = lane_block_count(p.vertex_count);
-  r.get_array(L.widths, 3 * B);
+  get_lane_widths(r, L, B, p.step_count, version);
   r.get_array(L.linear, B);
   r.get_array(L.raw, B);
   r.get_array(L.exception_rows, B);
@@ -50,9 +107,10 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p) {
   for (std::uint64_t b = 0; b < B; ++b) {
     rows += L.exception_rows[b];
     raw += std::uint64_t(std::popcount(L.raw[b])) * p.step_count;
-    const std::uint32_t w1 = lane_width_1(L, b), w = lane_width(L, b);
-    if (w1 > 32 || w > 32 || lane_exception_width(L, b) > 32) r.fail("lane block width over 32 bits at block " + std::to_string(b));
-    bits += lane_block_bits(p.first_width, w1, w, p.step_count);
+    const std::uint32_t w1 = lane_width_1(L, b), w2 = lane_width_2(L, b), w = lane_width(L, b);
+    if (w1 > 32 || w2 > 32 || w > 32 || lane_exception_width(L, b) > 32)
+      r.fail("lane block width over 32 bits at block " + std::to_string(b));
+    bits += lane_block_bits(p.first_width, w1, w2, w, p.step_count);
   }
   r.get_array(L.exception_steps, rows);
   r.get_array(L.exception_lanes, rows);
@@ -66,11 +124,22 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p) {
   if (words > r.remaining() / 4) r.fail("ends inside the lane words");
   L.words.assign(kLaneBlock + words, 0);  // the zero row, then the file's rows
   r.take(L.words.data() + kLaneBlock, words * 4);
+  if (version < 4) flip_lane_slot_signs(p, L.words.data() + kLaneBlock);
 }
 
 }  // namespace
 
-std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t page_index) {
+std::uint32_t max_method_of_version(std::uint32_t version) {
+  // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods,
+  // version 3 predictive_lanes (version 4 changed its layout).
+  if (version >= 3) return kMaxMethod;
+  return version >= 2 ? std::uint32_t(PageMethod::vq_aligned_residual) : std::uint32_t(PageMethod::predictive);
+}
+
+std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t page_index, std::uint32_t format_version) {
+  if (std::uint32_t(p.method) > max_method_of_version(format_version) || format_version > std::uint32_t(kContainerFormatVersion))
+    throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) + " cannot hold a page of method " +
+                                                 std::to_string(std::uint32_t(p.method)));
   std::vector<std::uint8_t> bytes(PageHeader::kBytes, 0);
   ByteWriter w(bytes);
   w.put_array(p.times);
@@ -104,7 +173,7 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   if (p.method == PageMethod::predictive_lanes) {
     const LaneBlocks& L = p.lanes;
     put_quantiser(w, p);
-    w.put_array(L.widths);
+    put_lane_widths(w, p, format_version);
     w.put_array(L.linear);
     w.put_array(L.raw);
     w.put_array(L.exception_rows);
@@ -113,7 +182,14 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     w.append(L.exception_bits.data(), L.exception_bits.size() - 8);  // without the read padding
     w.put_array(L.raw_values);
     // Without the zero row (a page reaches here validated; the max only keeps a bad one in bounds).
-    w.append(lane_rows(L), (std::max<std::size_t>(L.words.size(), kLaneBlock) - kLaneBlock) * 4);
+    const std::size_t words = std::max<std::size_t>(L.words.size(), kLaneBlock) - kLaneBlock;
+    if (format_version >= 4) {
+      w.append(lane_rows(L), words * 4);
+    } else {
+      std::vector<std::uint32_t> rows(lane_rows(L), lane_rows(L) + words);
+      flip_lane_slot_signs(p, rows.data());
+      w.append(rows.data(), words * 4);
+    }
   }
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();
@@ -156,9 +232,9 @@ bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
 }
 
 EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
-                               std::uint32_t K, const std::string& name, std::uint32_t max_method) {
+                               std::uint32_t K, const std::string& name, std::uint32_t format_version) {
   ByteReader r(payload, h.payload_bytes, name);
-  if (h.method > max_method) r.fail("unknown method " + std::to_string(h.method));
+  if (h.method > max_method_of_version(format_version)) r.fail("unknown method " + std::to_string(h.method));
   if (h.step_count < 1 || h.step_count > W) r.fail("step count " + std::to_string(h.step_count) + " outside 1..window");
   EncodedPage p;
   p.method = PageMethod(h.method);
@@ -206,7 +282,7 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
     if (p.blocks.group_offsets.back() != r.remaining()) r.fail("bit payload size does not match its group table");
     r.get_array(p.blocks.payload, p.blocks.group_offsets.back(), 8);
   }
-  if (p.method == PageMethod::predictive_lanes) read_lane_blocks(r, p);
+  if (p.method == PageMethod::predictive_lanes) read_lane_blocks(r, p, format_version);
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the payload");
   // Value by value, after the bytes: the section walk also derives each section's start.
   const std::string error = p.method == PageMethod::predictive_lanes ? lane_blocks_error(p, &p.lanes)

@@ -9,7 +9,8 @@
 //   *_residual, predictive: f32 step, f32 lo, u32 first width, u32 0, u64 group offsets
 //                          [groups + 1], 4-bit codes [N], bit payload (vertex_section.h)
 //   predictive_lanes:      f32 step, f32 lo, u32 first width, u32 0, then per block of 16
-//   (version 3)            vertices (B of them): u8 widths[3 B], u16 linear[B], u16 raw[B],
+//   (version 3)            vertices (B of them): u8 widths[4 B] (version 3: [3 B], without the
+//                          transient width), u16 linear[B], u16 raw[B],
 //                          u16 exception rows[B]; per exception row (R): u16 step[R],
 //                          u16 lanes[R]; high parts (bits); f32 raw values; u32 words
 //                          (lane_blocks.h; each table's size follows from those before it)
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "penumbra/compression/encoded_page.h"
+#include "penumbra/compression/version.h"
 
 namespace penumbra::compression::detail {
 
@@ -36,17 +38,24 @@ struct PageHeader {
   float sample_snr_db = 0, vq_bytes_estimate = 0, predictive_bytes_estimate = 0;
 };
 
-/// Header + payload bytes of a page.
-std::vector<std::uint8_t> serialize_page(const EncodedPage& page, std::uint32_t page_index);
+/// The highest PageMethod a file of format version `version` holds (version 1: 2).
+std::uint32_t max_method_of_version(std::uint32_t version);
+
+/// Header + payload bytes of a page, as a file of `format_version` holds it. Only this build's
+/// version writes every page; format version 3 holds predictive_lanes pages without a transient
+/// width (built with transient_width off). Throws Error(invalid_argument) for a page the
+/// version cannot hold.
+std::vector<std::uint8_t> serialize_page(const EncodedPage& page, std::uint32_t page_index,
+                                         std::uint32_t format_version = kContainerFormatVersion);
 
 /// Parses and checks a 64-byte header; false if the magic or its checksum is wrong.
 bool parse_page_header(const std::uint8_t* bytes, PageHeader& header);
 
 /// Parses a payload whose checksum was verified; every size and index is checked, so a
 /// malformed payload throws Error(io_error) naming `page_name` instead of reading out of bounds.
-/// `max_method`: the highest PageMethod the file's format version knows (version 1: 2).
+/// `format_version`: the file's, which decides the methods it knows and their layouts.
 EncodedPage parse_page_payload(const PageHeader& header, const std::uint8_t* payload, std::uint64_t vertex_count,
                                std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,
-                               std::uint32_t max_method);
+                               std::uint32_t format_version);
 
 }  // namespace penumbra::compression::detail

@@ -157,8 +157,7 @@ TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
   ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
   testing::expect_error(
       [&] {
-        detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, f.vertices, 8, 4, "page 0",
-                                   std::uint32_t(PageMethod::vq_aligned_residual));
+        detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, f.vertices, 8, 4, "page 0", 2);
       },
       ErrorCode::io_error, {"vertex 5", "no exceptions"}, "a patched section without exceptions");
 }

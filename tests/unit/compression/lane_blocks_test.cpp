@@ -73,7 +73,7 @@ EncodedPage through_page_bytes(const EncodedPage& page) {
   detail::PageHeader header;
   EXPECT_TRUE(detail::parse_page_header(bytes.data(), header));
   return detail::parse_page_payload(header, bytes.data() + detail::PageHeader::kBytes, page.vertex_count, page.window,
-                                    page.codebook_size, "test page", std::uint32_t(PageMethod::predictive_lanes));
+                                    page.codebook_size, "test page", kContainerFormatVersion);
 }
 
 TEST(LaneBlocks, EveryPathHoldsTheBoundOnHardWindows) {
@@ -166,7 +166,10 @@ TEST(LaneBlocks, ValidatePageFindsFaultsInTheTables) {
     testing::expect_error([&] { validate_page(bad); }, ErrorCode::invalid_argument, {what}, what);
   };
   EncodedPage bad = good;
-  bad.lanes.widths[4] = 33;  // block 1's later steps
+  bad.lanes.widths[detail::kLaneWidths + 2] = 33;  // block 1's later steps
+  expect_invalid(bad, "width over 32 bits at lane block 1");
+  bad = good;
+  bad.lanes.widths[detail::kLaneWidths + 1] = 33;  // block 1's transient steps
   expect_invalid(bad, "width over 32 bits at lane block 1");
   bad = good;
   bad.lanes.linear[2] |= 0x8000;  // lane 15 of the last block: past vertex 39
@@ -211,15 +214,111 @@ TEST(LaneBlocks, FilesRoundTripAndOlderVersionsCannotHoldThem) {
     testing::write_file(cut, bytes.data(), size);
     EXPECT_THROW(CompressedField::open(cut)->verify(), Error) << size << " bytes";
   }
-  // A file that says version 2 cannot hold such a page: it is corrupt, not a new page kind.
-  std::vector<char> v2 = bytes;
-  std::uint32_t header_bytes, crc, version = 2;
-  std::memcpy(&header_bytes, v2.data() + 12, 4);
-  std::memcpy(v2.data() + 8, &version, 4);
-  crc = crc32_reference(v2.data(), header_bytes - 4);
-  std::memcpy(v2.data() + header_bytes - 4, &crc, 4);
-  testing::write_file(cut, v2.data(), v2.size());
-  EXPECT_THROW(CompressedField::open(cut)->verify(), Error);
+  // A file that says version 2 cannot hold such a page: it is corrupt, not a new page kind. One
+  // that says version 3 holds this version's pages in the wrong layout: corrupt too.
+  for (const std::uint32_t version : {2u, 3u}) {
+    std::vector<char> older = bytes;
+    std::uint32_t header_bytes, crc;
+    std::memcpy(&header_bytes, older.data() + 12, 4);
+    std::memcpy(older.data() + 8, &version, 4);
+    crc = crc32_reference(older.data(), header_bytes - 4);
+    std::memcpy(older.data() + header_bytes - 4, &crc, 4);
+    testing::write_file(cut, older.data(), older.size());
+    EXPECT_THROW(CompressedField::open(cut)->verify(), Error) << "version " << version;
+  }
+}
+
+// A window whose first steps jump further than the rest, as a run's start does: the transient
+// steps get a width of their own.
+SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
+  SyntheticField f = testing::white_noise(n, steps, 11);
+  const float start[detail::kLaneTransientEnd] = {0, 30, 10, 40, 5, 25};  // then 20
+  for (std::uint64_t v = 0; v < n; ++v)
+    for (std::uint32_t t = 0; t < steps; ++t) {
+      float& x = f.values[std::uint64_t(t) * n + v];
+      x = 0.05f * x + (t < detail::kLaneTransientEnd ? start[t] : 20.f) * float(1 + v % 5);
+    }
+  return f;
+}
+
+// Builds `f`'s first window as lane blocks with or without the transient width, with the
+// quantiser encode_window chose for it.
+EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, bool transient_width) {
+  EncodedPage page = testing::encode(f, 0, n, CodecParams{}, 1e-3f * f.range());
+  EXPECT_EQ(page.method, PageMethod::predictive_lanes);
+  const std::uint64_t N = f.vertices;
+  page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, page.step, page.bound, page.first_width,
+                                         [&](std::uint64_t first, std::uint64_t count, float* x) {
+                                           for (std::uint64_t v = 0; v < count; ++v)
+                                             for (std::uint32_t t = 0; t < n; ++t)
+                                               x[v * page.window + t] = f.values[std::uint64_t(t) * N + first + v];
+                                         },
+                                         transient_width);
+  EXPECT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
+  return page;
+}
+
+TEST(LaneBlocks, TheTransientStepsTakeAWidthOfTheirOwn) {
+  const auto f = transient_field(500, 40);
+  const EncodedPage own = lane_page(f, 40, true), shared = lane_page(f, 40, false);
+  expect_paths_agree(f, 40, own, "transient width");
+  expect_paths_agree(f, 40, shared, "one width after step 1");
+  // Every full block's transient steps need wider slots than its later ones here (the last
+  // block's 4 lanes may take exception rows instead); with one width for both, the later steps
+  // pay for them or the transient steps become exception rows.
+  for (std::uint64_t b = 0; b < own.lanes.block_count(); ++b) {
+    if (b + 1 < own.lanes.block_count())
+      ASSERT_GT(detail::lane_width_2(own.lanes, b), detail::lane_width(own.lanes, b)) << b;
+    ASSERT_EQ(detail::lane_width_2(shared.lanes, b), detail::lane_width(shared.lanes, b)) << b;
+  }
+  EXPECT_LT(detail::serialize_page(own, 0).size(), detail::serialize_page(shared, 0).size());
+}
+
+// Format version 3 held lane blocks without the transient width and with offset-binary slots.
+TEST(LaneBlocks, Version3PagesReadBackAsTheyWereWritten) {
+  for (const std::uint32_t n : {40u, 5u, 2u}) {
+    const auto f = transient_field(333, n);
+    const EncodedPage page = lane_page(f, n, false);
+    const auto v3 = detail::serialize_page(page, 0, 3);
+    detail::PageHeader header;
+    ASSERT_TRUE(detail::parse_page_header(v3.data(), header));
+    const EncodedPage read = detail::parse_page_payload(header, v3.data() + detail::PageHeader::kBytes, page.vertex_count,
+                                                        page.window, page.codebook_size, "v3 page", 3);
+    ASSERT_EQ(read.lanes.widths, page.lanes.widths) << n;
+    ASSERT_TRUE(read.lanes.words == page.lanes.words) << n << " steps: slots not turned to two's complement";
+    expect_paths_agree(f, n, read, "version 3, " + std::to_string(n) + " steps");
+    EXPECT_EQ(detail::serialize_page(read, 0, 3), v3) << n;
+  }
+  // A page with a transient width of its own has no version-3 form.
+  const auto f = transient_field(333, 40);
+  testing::expect_error([&] { detail::serialize_page(lane_page(f, 40, true), 0, 3); }, ErrorCode::invalid_argument,
+                        {"format version 3 cannot hold"}, "a transient width in version 3");
+}
+
+// A file the build of format version 3 wrote (white_noise(100, 20, 7) with add_outliers, window
+// 16, codebooks of 16, a 1e-2 range-relative bound: two predictive_lanes pages of 16 and 4
+// steps, 28 exception rows), and the values that build read from it.
+TEST(LaneBlocks, Version3FilesReadExactlyAsTheirBuildReadThem) {
+  VectorDecodeGuard guard;
+  const std::string dir = PNB_COMPRESSION_TEST_DATA;
+  const auto field = CompressedField::open(dir + "/lanes_v3.pnbf");
+  ASSERT_EQ(field->format_version(), 3u);
+  field->verify();
+  const auto expected = testing::read_file(dir + "/lanes_v3_decoded.f32");
+  ASSERT_EQ(expected.size(), 100u * 20 * 4);
+  auto source = testing::white_noise(100, 20, 7);
+  testing::add_outliers(source);
+  std::vector<float> step(100);
+  for (const auto isa : {detail::LaneIsa::avx512_vbmi2, detail::LaneIsa::avx512, detail::LaneIsa::avx2, detail::LaneIsa::scalar}) {
+    detail::cap_lane_isa(isa);
+    for (std::uint64_t t = 0; t < 20; ++t) {
+      ASSERT_EQ(field->load_page(t / 16)->method, PageMethod::predictive_lanes);
+      field->read_step(t, step.data());
+      ASSERT_EQ(0, std::memcmp(step.data(), expected.data() + t * 400, 400)) << "decoders up to " << int(isa) << ", step " << t;
+      for (std::uint64_t v = 0; v < 100; ++v)
+        ASSERT_LE(std::fabs(step[v] - source.values[t * 100 + v]), 1e-2 * source.range() * (1 + 1e-6)) << t << "," << v;
+    }
+  }
 }
 
 }  // namespace

@@ -9,5 +9,7 @@ namespace penumbra::compression {
 ///      version-1 page kinds are unchanged, so a version-1 file reads as before
 ///   3  adds predictive_lanes pages (the predictive coder in blocks of 16 vertices); the
 ///      other layouts are unchanged
-constexpr int kContainerFormatVersion = 3;
+///   4  predictive_lanes blocks hold a fourth width, for the steps just after step 1 (a run's
+///      transient); version-3 lane pages read with it equal to their later steps' width
+constexpr int kContainerFormatVersion = 4;
 }  // namespace penumbra::compression
