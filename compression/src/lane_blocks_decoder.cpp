@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <type_traits>
 
 #include "lane_blocks.h"
 #include "section_lanes.h"
@@ -208,20 +209,32 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     __m512i d = errors(1, w1);
     k = _mm512_add_epi32(k, d);
     put512(out, store, values512(lo, step, k));
-    // The transient steps, then the later ones: one width each.
-    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w) {
+    // The transient steps, then the later ones: one width each. Where no exception row is left
+    // (the block had none, or only at step 1), the loops do not look for one: mug at 1e-3 with
+    // every row priced away decoded 15 % faster so, and unrolled 6 % faster again.
+    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w, auto rows_left) {
+#pragma GCC unroll 4
       for (std::uint32_t t = from; t < to; ++t) {
         out += N;
         end += w;
-        const __m512i error = errors(t, w);
+        __m512i error;
+        if constexpr (decltype(rows_left)::value)
+          error = errors(t, w);
+        else
+          error = errors512<Bits>(rows, end, w);
         d = _mm512_mask_add_epi32(error, linear, error, d);
         k = _mm512_add_epi32(k, d);
         put512(out, store, values512(lo, step, k));
       }
     };
-    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
-    steps(2, transient_end, lane_width_2(L, c));
-    steps(transient_end, n, lane_width(L, c));
+    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd), w2 = lane_width_2(L, c), w = lane_width(L, c);
+    if (next == 0) {
+      steps(2, transient_end, w2, std::false_type{});
+      steps(transient_end, n, w, std::false_type{});
+    } else {
+      steps(2, transient_end, w2, std::true_type{});
+      steps(transient_end, n, w, std::true_type{});
+    }
   }
 }
 
