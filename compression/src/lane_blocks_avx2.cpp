@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <type_traits>
 
 #include "lane_blocks.h"
 
@@ -18,32 +19,38 @@ namespace {
 
 constexpr std::uint64_t kHalf = kLaneBlock / 2;
 
-// One block's 32 bits from bit `pos` on, as lanes 0-7 and 8-15: a slot there is their low bits.
-inline void bits_from256(const std::uint32_t* rows, std::uint64_t pos, __m256i u[2]) {
-  const std::uint32_t* r = rows + (pos >> 5) * kLaneBlock;
-  const __m128i right = _mm_cvtsi32_si128(int(pos & 31)), left = _mm_cvtsi32_si128(int(32 - (pos & 31)));
+// One block's 32 bits of every column that end at bit `end`, as lanes 0-7 and 8-15: from the row
+// `end` lies in and the row below it (the page's zero row below row 0), as the AVX-512 decoder
+// reads them. A slot that ends there is their top bits.
+inline void bits_ending256(const std::uint32_t* rows, std::uint64_t end, __m256i u[2]) {
+  const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
+  const __m128i right = _mm_cvtsi32_si128(int(end & 31)), left = _mm_cvtsi32_si128(int(32 - (end & 31)));
   for (std::uint64_t h = 0; h < 2; ++h) {
-    const __m256i low = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + h * kHalf));
-    const __m256i high = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + kLaneBlock + h * kHalf));
-    u[h] = _mm256_or_si256(_mm256_srl_epi32(low, right), _mm256_sll_epi32(high, left));
+    const __m256i below = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r - kLaneBlock + h * kHalf));
+    const __m256i at = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r + h * kHalf));
+    u[h] = _mm256_or_si256(_mm256_srl_epi32(below, right), _mm256_sll_epi32(at, left));
   }
 }
 
-// The unsigned `width`-bit slots at bit `pos` (k_0), moving pos on.
+// The unsigned `width`-bit slots at bit `pos` (k_0; width 0: a shift by 32, zeros), moving pos on.
 inline void unsigned_slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
-  const __m256i mask = _mm256_set1_epi32(int(low_mask(width)));
-  bits_from256(rows, pos, u);
+  const __m128i spare = _mm_cvtsi32_si128(int(32 - width));
   pos += width;
-  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_and_si256(u[h], mask);
+  bits_ending256(rows, pos, u);
+  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_srl_epi32(u[h], spare);
 }
 
-// The two's-complement `width`-bit slots at bit `pos`, sign-extended (a shift left by 32 leaves
-// zeros: width 0), moving pos on.
+// The two's-complement `width`-bit slots at bit `pos`, sign-extended by the one shift that
+// extracts them, moving pos on.
 inline void signed_slots256(const std::uint32_t* rows, std::uint64_t& pos, std::uint32_t width, __m256i u[2]) {
+  if (width == 0) {
+    u[0] = u[1] = _mm256_setzero_si256();
+    return;
+  }
   const __m128i spare = _mm_cvtsi32_si128(int(32 - width));
-  bits_from256(rows, pos, u);
   pos += width;
-  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sra_epi32(_mm256_sll_epi32(u[h], spare), spare);
+  bits_ending256(rows, pos, u);
+  for (std::uint64_t h = 0; h < 2; ++h) u[h] = _mm256_sra_epi32(u[h], spare);
 }
 
 // Adds exception row `row`'s high parts to its lanes of u, moving row and high on (rare: lane by
@@ -117,12 +124,16 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
       for (std::uint64_t h = 0; h < 2; ++h) k[h] = _mm256_add_epi32(k[h], d[h]);
       put(out);
     }
-    // The transient steps, then the later ones: one width each.
-    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w) {
+    // The transient steps, then the later ones: one width each; as in avx512_window, loops that do
+    // not look for exception rows where none is left.
+    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w, auto rows_left) {
       for (std::uint32_t t = from; t < to; ++t) {
         out += N;
         __m256i error[2];
-        errors(t, w, error);
+        if constexpr (decltype(rows_left)::value)
+          errors(t, w, error);
+        else
+          signed_slots256(rows, pos, w, error);
         for (std::uint64_t h = 0; h < 2; ++h) {
           d[h] = _mm256_add_epi32(error[h], _mm256_and_si256(d[h], linear[h]));
           k[h] = _mm256_add_epi32(k[h], d[h]);
@@ -130,9 +141,14 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
         put(out);
       }
     };
-    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
-    steps(2, transient_end, lane_width_2(L, c));
-    steps(transient_end, n, lane_width(L, c));
+    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd), w2 = lane_width_2(L, c), w = lane_width(L, c);
+    if (next == 0) {
+      steps(2, transient_end, w2, std::false_type{});
+      steps(transient_end, n, w, std::false_type{});
+    } else {
+      steps(2, transient_end, w2, std::true_type{});
+      steps(transient_end, n, w, std::true_type{});
+    }
   }
 }
 
