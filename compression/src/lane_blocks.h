@@ -23,6 +23,7 @@
 // vector decoders agree exactly.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -76,6 +77,17 @@ inline std::uint32_t lane_transient_steps(std::uint32_t steps) {
   return std::min(steps, kLaneTransientEnd) - std::min(steps, 2u);
 }
 inline std::uint32_t lane_later_steps(std::uint32_t steps) { return steps - std::min(steps, kLaneTransientEnd); }
+
+/// A run of a block's steps after step 1 that share one width: [from, to).
+struct LaneStepSpan {
+  std::uint32_t from, to, width;
+};
+
+/// Block b's steps after step 1 in an n-step page: the transient steps, then the later ones.
+inline std::array<LaneStepSpan, 2> lane_step_spans(const LaneBlocks& L, std::uint64_t b, std::uint32_t steps) {
+  const std::uint32_t transient_end = std::min(steps, kLaneTransientEnd);
+  return {{{2, transient_end, lane_width_2(L, b)}, {transient_end, steps, lane_width(L, b)}}};
+}
 
 /// Bits a block takes in each column.
 inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1, std::uint32_t w2, std::uint32_t w,

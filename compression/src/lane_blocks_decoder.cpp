@@ -212,9 +212,10 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     // The transient steps, then the later ones: one width each. Where no exception row is left
     // (the block had none, or only at step 1), the loops do not look for one: mug at 1e-3 with
     // every row priced away decoded 15 % faster so, and unrolled 6 % faster again.
-    const auto steps = [&](std::uint32_t from, std::uint32_t to, std::uint32_t w, auto rows_left) {
+    const auto steps = [&](const LaneStepSpan& span, auto rows_left) {
+      const std::uint32_t w = span.width;
 #pragma GCC unroll 4
-      for (std::uint32_t t = from; t < to; ++t) {
+      for (std::uint32_t t = span.from; t < span.to; ++t) {
         out += N;
         end += w;
         __m512i error;
@@ -227,14 +228,9 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
         put512(out, store, values512(lo, step, k));
       }
     };
-    const std::uint32_t transient_end = std::min(n, kLaneTransientEnd), w2 = lane_width_2(L, c), w = lane_width(L, c);
-    if (next == 0) {
-      steps(2, transient_end, w2, std::false_type{});
-      steps(transient_end, n, w, std::false_type{});
-    } else {
-      steps(2, transient_end, w2, std::true_type{});
-      steps(transient_end, n, w, std::true_type{});
-    }
+    const auto spans = lane_step_spans(L, c, n);  // named calls: a loop over the two cost AVX2 7 %
+    const auto run = [&](auto rows_left) { steps(spans[0], rows_left); steps(spans[1], rows_left); };
+    next == 0 ? run(std::false_type{}) : run(std::true_type{});
   }
 }
 
