@@ -13,14 +13,14 @@
 // Blocks follow each other without gaps (lane_block_bits gives a block's bits). A run's first
 // steps often jump further than its later ones, so step 1 and the transient steps have widths of
 // their own. A difference d too wide for its step's width is an exception: the block lists the
-// step's row (step, lanes), and the high part h = (d - s) / 2^width, s being the slot's low
-// bits as a signed value, zigzag-coded at the block's exception width x, follows in
-// exception_bits. (Format version 3 had no transient width, and its slots held d + 2^(v-1),
-// offset binary, with the same high parts: its pages are read with w2 = w and each slot's top
-// bit flipped, see flip_lane_slot_signs.) Raw lanes (values
-// that lo + k step cannot hold within the bound) read 0 in every slot and take their n exact
-// floats from raw_values. All integer arithmetic wraps in 32 bits, so that the scalar and the
-// vector decoders agree exactly.
+// step's row (step, lanes), and the high part h = (d - s) / 2^width, s being the slot's low bits
+// as a signed value, zigzag-coded at the block's exception width x, follows in exception_bits.
+// Raw lanes (values that lo + k step cannot hold within the bound) read 0 in every slot and take
+// their n exact floats from raw_values. All integer arithmetic wraps in 32 bits, so that the
+// scalar and the vector decoders agree exactly.
+// Format version 3 had no transient width, and its slots held d + 2^(v-1) (offset binary) with
+// the same high parts: its pages are read with w2 = w and each slot's top bit flipped
+// (page_format.cpp).
 #pragma once
 #include <algorithm>
 #include <array>

@@ -36,8 +36,6 @@ void get_quantiser(ByteReader& r, EncodedPage& p) {
   r.get<std::uint32_t>();
 }
 
-// The tables of a predictive_lanes page in their stored order; each variable-length table's
-// size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
 // Format version 3 stored three widths a block: step 1's, one for every later step, the high
 // parts'. In memory its later width serves the transient steps too (and none past them when
 // the page has none).
@@ -94,6 +92,8 @@ void flip_lane_slot_signs(const EncodedPage& p, std::uint32_t* rows) {
   }
 }
 
+// The tables of a predictive_lanes page in their stored order; each variable-length table's
+// size follows from those before it (lane_blocks.h), and lane_blocks_error checks the rest.
 void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   LaneBlocks& L = p.lanes;
   get_quantiser(r, p);
