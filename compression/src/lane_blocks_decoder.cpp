@@ -173,10 +173,11 @@ __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wi
 // spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, joined by a
 // funnel shift (or two shifts and an or) and an arithmetic shift; an exception row adds its high
 // parts, expanded into their lanes. The transient steps and the later ones each run a loop of
-// their own, so that a step's width stays in a register. The block keeps k and its last difference d = k_t - k_{t-1}:
-// the extrapolating lanes' next difference is d plus the error, the others' the error alone (one
-// masked add), the same integers as k_{t-1} + prediction error. Bit-identical to lane_block_step:
-// the same wrapping integers, then a multiply and an add that are never fused.
+// their own, so that a step's width stays in a register. The block keeps k and its last
+// difference d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the error, the
+// others' the error alone (one masked add), the same integers as k_{t-1} + prediction error.
+// Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add that
+// are never fused.
 template <class Bits>
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;

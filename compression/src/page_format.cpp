@@ -57,9 +57,6 @@ void get_lane_widths(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_
 void put_lane_widths(ByteWriter& w, const EncodedPage& p, std::uint32_t version) {
   const LaneBlocks& L = p.lanes;
   if (version >= 4) return w.put_array(L.widths);
-  // The slots are flipped back by the widths: they must describe the words.
-  if (L.bit_start.size() != L.block_count() + 1 || L.words.size() != lane_words_held(L.bit_start.back()))
-    throw Error(ErrorCode::invalid_argument, "lane blocks whose offsets do not match their words");
   std::vector<std::uint8_t> stored(kVersion3LaneWidths * L.block_count());
   for (std::uint64_t b = 0; b < L.block_count(); ++b) {
     const std::uint32_t w2 = lane_width_2(L, b), later = lane_width(L, b);
@@ -186,6 +183,9 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     if (format_version >= 4) {
       w.append(lane_rows(L), words * 4);
     } else {
+      // The slots are flipped back by the widths: they must describe the words.
+      if (L.bit_start.size() != L.block_count() + 1 || L.words.size() != lane_words_held(L.bit_start.back()))
+        throw Error(ErrorCode::invalid_argument, "lane blocks whose offsets do not match their words");
       std::vector<std::uint32_t> rows(lane_rows(L), lane_rows(L) + words);
       flip_lane_slot_signs(p, rows.data());
       w.append(rows.data(), words * 4);
