@@ -112,18 +112,22 @@ struct TwoShifts {
     return _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm_cvtsi32_si128(int(sh))),
                            _mm512_sll_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(32 - sh))));
   }
-};
+  // A span's slots of one width, one step after another.
+  class Reader {
+   public:
+    Reader(const std::uint32_t* rows, std::uint64_t end, std::uint32_t width) : m_rows(rows), m_end(end), m_width(width) {}
+    __m512i next() {
+      m_end += m_width;
+      return bits_ending(m_rows, m_end);
+    }
+    std::uint64_t end() const { return m_end; }
 
-// Adds exception row `row`'s high parts to its lanes of the errors e, moving row and high on.
-// (Plain pointers rather than the page's vectors: after a vector store, which may alias anything,
-// a vector's data pointer would be loaded again.)
-inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint64_t& row,
-                        std::uint64_t& high, std::uint32_t width, __m512i e) {
-  const __mmask16 lanes = exception_lanes[row++];
-  const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high);
-  high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
-  return _mm512_add_epi32(e, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
-}
+   private:
+    const std::uint32_t* m_rows;
+    std::uint64_t m_end;
+    std::uint32_t m_width;
+  };
+};
 
 inline __m512 values512(__m512 lo, __m512 step, __m512i k) {
   return _mm512_add_ps(lo, _mm512_mul_ps(_mm512_cvtepi32_ps(k), step));
@@ -137,6 +141,32 @@ inline void put512(float* out, __mmask16 lanes, __m512 v) {
   else
     _mm512_mask_storeu_ps(out, lanes, v);
 }
+
+// Adds exception row `row`'s high parts to its lanes of the errors e, moving row and high on.
+inline __m512i patch512(const std::uint16_t* exception_lanes, const std::uint32_t* highs, std::uint64_t& row,
+                        std::uint64_t& high, std::uint32_t width, __m512i e) {
+  const __mmask16 lanes = exception_lanes[row++];
+  const __m512i h = _mm512_maskz_expandloadu_epi32(lanes, highs + high);
+  high += std::uint32_t(std::popcount(std::uint32_t(lanes)));
+  return _mm512_add_epi32(e, _mm512_sll_epi32(h, _mm_cvtsi32_si128(int(width))));
+}
+
+// A block's exception rows: where its next row and high part are, and that row's step. (Plain
+// pointers rather than the page's vectors: after a vector store, which may alias anything, a
+// vector's data pointer would be loaded again.)
+struct BlockRows {
+  const std::uint16_t *steps, *lanes;
+  const std::uint32_t* highs;
+  std::uint64_t row, row_end, high;
+  std::uint32_t next;  // 0: no row left (none lies at step 0)
+  // e plus the high parts, at `width`, of the block's row at step t if it has one there.
+  __m512i add(std::uint32_t t, std::uint32_t width, __m512i e) {
+    if (next != t) return e;
+    e = patch512(lanes, highs, row, high, width, e);
+    next = next_exception_step(steps, row, row_end);
+    return e;
+  }
+};
 
 #pragma GCC pop_options
 
@@ -154,6 +184,26 @@ struct FunnelShift {
     const __m512i shift = _mm512_set1_epi32(int(end & 31));
     return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), shift);
   }
+  // Keeps the shift in a vector and adds the width at each step: the funnel shift reads only the
+  // count's low 5 bits, so the count may run past 31, and no scalar goes to a vector per step.
+  class Reader {
+   public:
+    Reader(const std::uint32_t* rows, std::uint64_t end, std::uint32_t width)
+        : m_rows(rows), m_end(end), m_width(width), m_shift(_mm512_set1_epi32(int(end))), m_step(_mm512_set1_epi32(int(width))) {}
+    __m512i next() {
+      m_end += m_width;
+      m_shift = _mm512_add_epi32(m_shift, m_step);
+      const std::uint32_t* r = m_rows + (m_end >> 5) * kLaneBlock;
+      return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), m_shift);
+    }
+    std::uint64_t end() const { return m_end; }
+
+   private:
+    const std::uint32_t* m_rows;
+    std::uint64_t m_end;
+    std::uint32_t m_width;
+    __m512i m_shift, m_step;
+  };
 };
 
 // k_0: the unsigned `width`-bit slots ending at `end` (width 0: zeros, a shift by 32).
@@ -173,65 +223,83 @@ __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wi
 // spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, joined by a
 // funnel shift (or two shifts and an or) and an arithmetic shift; an exception row adds its high
 // parts, expanded into their lanes. The transient steps and the later ones each run a loop of
-// their own, so that a step's width stays in a register. The block keeps k and its last
-// difference d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the error, the
-// others' the error alone (one masked add), the same integers as k_{t-1} + prediction error.
+// their own, so that a step's width stays in a register, and the loop is as short as it can be:
+// the decoder issues instructions as fast as the core takes them, so each one a step saves counts.
+// A span without an exception row does not look for one (on mug a third of the blocks have none
+// after step 1, and most rows lie in the first steps), and a span of width 0 without rows holds k (or moves it by the extrapolating lanes'
+// difference) without reading a slot. The block keeps k and its last difference
+// d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the error, the others'
+// the error alone (one masked add), the same integers as k_{t-1} + prediction error.
 // Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add that
-// are never fused.
-template <class Bits>
+// are never fused. Full: every lane of every block is a vertex (whole-vector stores).
+template <class Bits, bool Full>
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count, fw = p.first_width;
   const std::uint32_t* rows = lane_rows(L);
-  const std::uint16_t *exception_steps = L.exception_steps.data(), *exception_lanes = L.exception_lanes.data();
-  const std::uint32_t* highs = L.highs.data();
   const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
   for (std::uint64_t c = b; c < e; ++c) {
     const __mmask16 store = lane_block_mask(N, c), linear = L.linear[c];
-    const std::uint32_t w1 = lane_width_1(L, c);
-    const std::uint64_t row_end = L.row_start[c + 1];
-    std::uint64_t end = L.bit_start[c] + fw, row = L.row_start[c], high = L.high_start[c];
-    std::uint32_t next = next_exception_step(exception_steps, row, row_end);  // 0: no exception row left
-    // The errors at step t >= 1, ending at `end`, with the block's exception row if it has one there.
-    const auto errors = [&](std::uint32_t t, std::uint32_t width) {
-      const __m512i x = errors512<Bits>(rows, end, width);
-      if (next != t) return x;
-      const __m512i patched = patch512(exception_lanes, highs, row, high, width, x);
-      next = next_exception_step(exception_steps, row, row_end);
-      return patched;
+    const auto put = [&](float* to, __m512 v) __attribute__((always_inline)) {
+      if constexpr (Full)
+        _mm512_storeu_ps(to, v);
+      else
+        _mm512_mask_storeu_ps(to, store, v);
     };
+    const std::uint32_t w1 = lane_width_1(L, c);
+    std::uint64_t end = L.bit_start[c] + fw;
+    BlockRows exceptions{L.exception_steps.data(), L.exception_lanes.data(), L.highs.data(), L.row_start[c],
+                         L.row_start[c + 1],       L.high_start[c],          0};
+    exceptions.next = next_exception_step(exceptions.steps, exceptions.row, exceptions.row_end);
     float* out = window + c * kLaneBlock;
     __m512i k = first512<Bits>(rows, end, fw);
-    put512(out, store, values512(lo, step, k));
+    put(out, values512(lo, step, k));
     if (n < 2) continue;
     out += N;
     end += w1;
-    __m512i d = errors(1, w1);
+    __m512i d = exceptions.add(1, w1, errors512<Bits>(rows, end, w1));
     k = _mm512_add_epi32(k, d);
-    put512(out, store, values512(lo, step, k));
-    // The transient steps, then the later ones: one width each. Where no exception row is left
-    // (the block had none, or only at step 1), the loops do not look for one: mug at 1e-3 with
-    // every row priced away decoded 15 % faster so, and unrolled 6 % faster again.
-    const auto steps = [&](const LaneStepSpan& span, auto rows_left) {
+    put(out, values512(lo, step, k));
+    const auto steps = [&](const LaneStepSpan& span, auto rows_left) __attribute__((always_inline)) {
+      constexpr bool kRows = decltype(rows_left)::value;
       const std::uint32_t w = span.width;
-#pragma GCC unroll 4
-      for (std::uint32_t t = span.from; t < span.to; ++t) {
+      const auto advance = [&](__m512i error) __attribute__((always_inline)) {
         out += N;
-        end += w;
-        __m512i error;
-        if constexpr (decltype(rows_left)::value)
-          error = errors(t, w);
-        else
-          error = errors512<Bits>(rows, end, w);
         d = _mm512_mask_add_epi32(error, linear, error, d);
         k = _mm512_add_epi32(k, d);
-        put512(out, store, values512(lo, step, k));
+        put(out, values512(lo, step, k));
+      };
+      if (w == 0) {
+        if constexpr (!kRows) {
+          d = _mm512_maskz_mov_epi32(linear, d);  // every error is 0
+          if (_mm512_test_epi32_mask(d, d) == 0) {
+            const __m512 v = values512(lo, step, k);
+            for (std::uint32_t t = span.from; t < span.to; ++t) put(out += N, v);
+            return;
+          }
+        }
+        for (std::uint32_t t = span.from; t < span.to; ++t)
+          advance(kRows ? exceptions.add(t, w, _mm512_setzero_si512()) : _mm512_setzero_si512());
+        return;
       }
+      const __m128i spare = _mm_cvtsi32_si128(int(32 - w));
+      typename Bits::Reader slots(rows, end, w);
+#pragma GCC unroll 4
+      for (std::uint32_t t = span.from; t < span.to; ++t) {
+        const __m512i error = _mm512_sra_epi32(slots.next(), spare);
+        advance(kRows ? exceptions.add(t, w, error) : error);
+      }
+      end = slots.end();
+    };
+    // Each span looks for exception rows only if it has one (a row's step is in it: the rows
+    // before it were taken).
+    const auto span = [&](const LaneStepSpan& s) __attribute__((always_inline)) {
+      exceptions.next != 0 && exceptions.next < s.to ? steps(s, std::true_type{}) : steps(s, std::false_type{});
     };
     const auto spans = lane_step_spans(L, c, n);  // named calls: a loop over the two cost AVX2 7 %
-    const auto run = [&](auto rows_left) { steps(spans[0], rows_left); steps(spans[1], rows_left); };
-    next == 0 ? run(std::false_type{}) : run(std::true_type{});
+    span(spans[0]);
+    span(spans[1]);
   }
 }
 
@@ -257,6 +325,14 @@ void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlo
     put512(out + k * kLaneBlock, lane_block_mask(p.vertex_count, k), values512(lo, step, next));
   }
 }
+
+// Blocks [b, e): the full ones, then the last if some of its lanes are padding.
+template <class Bits>
+void avx512_blocks(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
+  const std::uint64_t full_end = std::min(e, p.vertex_count / kLaneBlock);
+  if (b < full_end) avx512_window<Bits, true>(p, b, full_end, window);
+  if (std::max(b, full_end) < e) avx512_window<Bits, false>(p, std::max(b, full_end), e, window);
+}
 #pragma GCC pop_options
 #pragma GCC diagnostic pop
 
@@ -277,8 +353,8 @@ void cap_lane_isa(LaneIsa widest) { g_lane_isa_cap.store(int(widest), std::memor
 void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   if (b >= e) return;
   switch (lane_isa()) {
-    case LaneIsa::avx512_vbmi2: avx512_window<FunnelShift>(p, b, e, window); break;
-    case LaneIsa::avx512: avx512_window<TwoShifts>(p, b, e, window); break;
+    case LaneIsa::avx512_vbmi2: avx512_blocks<FunnelShift>(p, b, e, window); break;
+    case LaneIsa::avx512: avx512_blocks<TwoShifts>(p, b, e, window); break;
     case LaneIsa::avx2: lane_blocks_window_avx2(p, b, e, window); break;
     case LaneIsa::scalar: scalar_window(p, b, e, window); return;  // raw lanes included
   }

@@ -7,13 +7,15 @@
 set -euo pipefail
 command -v objdump >/dev/null || { echo "objdump not found"; exit 1; }
 code=$(objdump -d --no-show-raw-insn -C "$1")
-instances() {  # the disassembly of the avx512_window and avx512_next instances for policy $1,
-  # with their lambdas where the compiler left those out of line (the sanitizer build does)
+instances() {  # the disassembly of the avx512_window, avx512_blocks and avx512_next instances for
+  # policy $1, with their lambdas where the compiler left those out of line (the sanitizer build
+  # does); at least one window decoder (the blocks one may have taken both in) and one cursor one
   awk -v policy="$1" '/^[0-9a-f]+ </ {
-      p = ($0 ~ ("avx512_(window|next)<[^>]*" policy ">"))
-      if ($0 ~ ("^[0-9a-f]+ <void .*avx512_(window|next)<[^>]*" policy ">\\(")) ++n
+      p = ($0 ~ ("avx512_(window|blocks|next)<[^>]*" policy "[,>]"))
+      if ($0 ~ ("^[0-9a-f]+ <void .*avx512_(window|blocks)<[^>]*" policy "[,>][^(]*\\(")) ++w
+      if ($0 ~ ("^[0-9a-f]+ <void .*avx512_next<[^>]*" policy ">\\(")) ++c
     }
-    p { print } END { if (n != 2) exit 3 }' <<<"$code"
+    p { print } END { if (w < 1 || c != 1) exit 3 }' <<<"$code"
 }
 two=$(instances TwoShifts) || { echo "TwoShifts instances not found in $1"; exit 1; }
 funnel=$(instances FunnelShift) || { echo "FunnelShift instances not found in $1"; exit 1; }

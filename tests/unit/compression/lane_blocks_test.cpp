@@ -278,6 +278,66 @@ TEST(LaneBlocks, TheTransientStepsTakeAWidthOfTheirOwn) {
   EXPECT_LT(detail::serialize_page(own, 0).size(), detail::serialize_page(shared, 0).size());
 }
 
+// A field of whole numbers coded exactly (step 1, lo 0) as one window of lane blocks, n steps,
+// 56 vertices: block 0 constant; block 1 ramps of slopes 1-3, which the extrapolating predictor
+// holds exactly; block 2 constant but for jumps that stay (steps 3, 10 and 25); and a last block
+// of 8 lanes, ramps and constants. Its later steps (block 2: all but its jumps) take width 0.
+EncodedPage exact_lane_page(SyntheticField& f, std::uint32_t n) {
+  const std::uint64_t N = 56;
+  f = SyntheticField{N, n, std::vector<float>(N * n), std::vector<double>(n)};
+  for (std::uint32_t t = 0; t < n; ++t) {
+    f.times[t] = t;
+    for (std::uint64_t v = 0; v < N; ++v) {
+      const std::uint64_t b = v / 16;
+      const float ramp = 100.f + 3.f * float(v) + float(1 + v % 3) * float(t);
+      float x = b == 0 ? float(v) : b == 1 ? ramp : b == 2 ? 1000.f + float(v) : v % 2 ? ramp : 2000.f + float(v);
+      if (v == 33 && t >= 10) x += 37;
+      if ((v == 40 || v == 41) && t >= 25) x -= 50;
+      if (v == 35 && t >= 3) x += 20;
+      f.values[std::uint64_t(t) * N + v] = x;
+    }
+  }
+  EncodedPage page;
+  page.method = PageMethod::predictive_lanes;
+  page.step_count = n;
+  page.window = 64;
+  page.vertex_count = N;
+  page.times = f.times;
+  page.value_min = 0;
+  page.value_max = 2100;
+  page.lo = 0;
+  page.step = 1;
+  page.bound = 0.5f;
+  page.first_width = 12;
+  page.lanes = detail::build_lane_blocks(N, n, n, page.lo, page.step, page.bound, page.first_width,
+                                         [&](std::uint64_t first, std::uint64_t count, float* x) {
+                                           for (std::uint64_t v = 0; v < count; ++v)
+                                             for (std::uint32_t t = 0; t < n; ++t) x[v * n + t] = f.values[std::uint64_t(t) * N + first + v];
+                                         });
+  EXPECT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
+  return page;
+}
+
+// The vector window decoders hold k through a span of width 0 without an exception row (or move
+// it by the extrapolating lanes' difference) without reading its slots, and take the rows of a
+// span of width 0 alone: the same values as the scalar decoder.
+TEST(LaneBlocks, SpansOfWidthZeroHoldOrExtrapolateExactly) {
+  for (const std::uint32_t n : {40u, 4u}) {
+    SyntheticField f;
+    const EncodedPage page = exact_lane_page(f, n);
+    const LaneBlocks& L = page.lanes;
+    ASSERT_EQ(L.block_count(), 4u);
+    for (std::uint64_t b = 0; b < 4; ++b) ASSERT_EQ(detail::lane_width_2(L, b), 0u) << n << " steps, block " << b;
+    ASSERT_EQ(L.linear[1], 0xFFFF) << "ramps extrapolate";
+    ASSERT_EQ(L.exception_rows[0] + L.exception_rows[1] + L.exception_rows[3], 0u);
+    ASSERT_EQ(L.exception_rows[2], n == 40 ? 3u : 1u) << "the jumps are rows";
+    expect_paths_agree(f, n, page, "whole numbers, " + std::to_string(n) + " steps");
+    std::vector<float> window(f.values.size());
+    decode_window(page, window.data());
+    EXPECT_EQ(window, f.values) << n << " steps";
+  }
+}
+
 // Format version 3 held lane blocks without the transient width and with offset-binary slots.
 TEST(LaneBlocks, Version3PagesReadBackAsTheyWereWritten) {
   for (const std::uint32_t n : {40u, 5u, 2u}) {
