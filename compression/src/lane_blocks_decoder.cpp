@@ -223,13 +223,14 @@ __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wi
 // spilled theirs, and ran 6 % slower in a prototype). Each step is two row loads, joined by a
 // funnel shift (or two shifts and an or) and an arithmetic shift; an exception row adds its high
 // parts, expanded into their lanes. The transient steps and the later ones each run a loop of
-// their own, so that a step's width stays in a register, and the loop is as short as it can be:
-// the decoder issues instructions as fast as the core takes them, so each one a step saves counts.
+// their own, so that a step's width stays in a register; the loop is bound by the instructions
+// it issues, so it keeps as few as it can (no store mask, no per-step shift count from a scalar).
 // A span without an exception row does not look for one (on mug a third of the blocks have none
-// after step 1, and most rows lie in the first steps), and a span of width 0 without rows holds k (or moves it by the extrapolating lanes'
-// difference) without reading a slot. The block keeps k and its last difference
-// d = k_t - k_{t-1}: the extrapolating lanes' next difference is d plus the error, the others'
-// the error alone (one masked add), the same integers as k_{t-1} + prediction error.
+// after step 1, and most rows lie in the first steps), and a span of width 0 without rows holds
+// k, or moves it by the extrapolating lanes' difference, without reading a slot. The block keeps
+// k and its last difference d = k_t - k_{t-1}: the extrapolating lanes' next difference is d
+// plus the error, the others' the error alone (one masked add), the same integers as k_{t-1} +
+// prediction error.
 // Bit-identical to lane_block_step: the same wrapping integers, then a multiply and an add that
 // are never fused. Full: every lane of every block is a vertex (whole-vector stores).
 template <class Bits, bool Full>
