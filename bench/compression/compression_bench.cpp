@@ -80,7 +80,7 @@ bool another_round(int done, int at_least, Clock::time_point start) {
 }
 
 double memcpy_gbps(const Field& f) {
-  std::vector<float> dst(f.values.size());
+  Floats dst(f.values.size());
   double best = 1e30;
   const auto start = Clock::now();
   for (int rep = 0; another_round(rep, 5, start); ++rep) {
@@ -108,16 +108,20 @@ bool evict(const void* p, std::size_t bytes) {
 #endif
 }
 
-template <class T>
-bool evict(const std::vector<T>& v) {
-  return evict(v.data(), v.size() * sizeof(T));
+template <class Vector>
+bool evict(const Vector& v) {
+  return evict(v.data(), v.size() * sizeof(v[0]));
 }
 
 bool evict(const pc::EncodedPage& p) {
   bool ok = evict(p.c8) && evict(p.cw) && evict(p.mean_q) && evict(p.i8) && evict(p.iw);
   ok = ok && evict(p.ca) && evict(p.shift) && evict(p.ia);
   const pc::BitBlocks& b = p.blocks;
-  return ok && evict(b.group_offsets) && evict(b.widths) && evict(b.payload) && evict(b.section_bits);
+  ok = ok && evict(b.group_offsets) && evict(b.widths) && evict(b.payload) && evict(b.section_bits);
+  const pc::LaneBlocks& l = p.lanes;
+  ok = ok && evict(l.widths) && evict(l.linear) && evict(l.raw) && evict(l.exception_rows) && evict(l.exception_steps);
+  ok = ok && evict(l.exception_lanes) && evict(l.exception_bits) && evict(l.raw_values) && evict(l.words);
+  return ok && evict(l.bit_start) && evict(l.raw_start) && evict(l.row_start) && evict(l.high_start) && evict(l.highs);
 }
 
 // ---- Penumbra ----------------------------------------------------------------------------
@@ -146,7 +150,7 @@ Row run_penumbra(const Field& f, const std::string& scratch, pc::CodecParams par
   // (the best of each over another_round's rounds): from resident pages (what a renderer holding
   // the page sees; peers also decode from memory), and from the file (page read + checksum + parse
   // included).
-  std::vector<float> out(f.values.size()), copy(f.values.size());
+  Floats out(f.values.size()), copy(f.values.size());
   std::vector<std::shared_ptr<const pc::EncodedPage>> pages;
   for (std::size_t p = 0; p < field->page_count(); ++p) pages.push_back(field->load_page(p));
   double decode_s = 1e30, load_decode_s = 1e30, copy_s = 1e30;
@@ -185,7 +189,7 @@ Row run_penumbra(const Field& f, const std::string& scratch, pc::CodecParams par
   // One step for all vertices: sequential playback through a new pager (its construction and
   // every page load included; pager_stalls counts reads that waited after prepare()), best of 3 like the other timings, so that one-off costs of the process (the
   // first read of the file, the first use of the worker threads) do not count.
-  std::vector<float> step(f.vertices);
+  Floats step(f.vertices);
   double play_s = 1e30;
   pc::PagerStats ps;
   for (int rep = 0; rep < 3; ++rep) {
@@ -232,7 +236,7 @@ struct Trial {
 
 Trial trial(const Peer& peer, const Field& f, double param) {
   const auto bytes = peer.compress(f, param);
-  std::vector<float> out(f.values.size());
+  Floats out(f.values.size());
   peer.decompress(bytes, f, param, out.data());
   return {param, double(f.values.size()) * 4 / double(bytes.size()), measure(f, out.data())};
 }
@@ -267,7 +271,7 @@ Row time_peer(const Peer& peer, const Field& f, double param, const std::string&
   auto t0 = Clock::now();
   const auto bytes = peer.compress(f, param);
   const double enc = seconds(t0);
-  std::vector<float> out(f.values.size());
+  Floats out(f.values.size());
   double dec = 1e30;
   const auto start = Clock::now();
   for (int rep = 0; another_round(rep, 2, start); ++rep) {
@@ -275,7 +279,7 @@ Row time_peer(const Peer& peer, const Field& f, double param, const std::string&
     peer.decompress(bytes, f, param, out.data());
     dec = std::min(dec, seconds(t0));
   }
-  std::vector<float> step(f.vertices);
+  Floats step(f.vertices);
   const std::uint32_t probes = std::min<std::uint32_t>(f.steps, 4);
   t0 = Clock::now();
   for (std::uint32_t i = 0; i < probes; ++i) peer.decompress_step(bytes, f, param, (i * 37 + 5) % f.steps, step.data());
