@@ -159,6 +159,16 @@ struct BlockRows {
   const std::uint32_t* highs;
   std::uint64_t row, row_end, high;
   std::uint32_t next;  // 0: no row left (none lies at step 0)
+  static BlockRows of(const LaneBlocks& L, std::uint64_t b) {
+    const std::uint64_t row = L.row_start[b], row_end = L.row_start[b + 1];
+    return {L.exception_steps.data(),
+            L.exception_lanes.data(),
+            L.highs.data(),
+            row,
+            row_end,
+            L.high_start[b],
+            next_exception_step(L.exception_steps.data(), row, row_end)};
+  }
   // e plus the high parts, at `width`, of the block's row at step t if it has one there.
   __m512i add(std::uint32_t t, std::uint32_t width, __m512i e) {
     if (next != t) return e;
@@ -179,10 +189,13 @@ struct BlockRows {
 #pragma GCC target("avx512f,avx512vbmi2")
 // The same 32 bits by one funnel shift, on CPUs with AVX-512 VBMI2 (4-7 % faster on mug).
 struct FunnelShift {
-  static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
+  // `shift`: end % 32 in every lane (the funnel shift reads only a count's low 5 bits).
+  static __m512i funnel(const std::uint32_t* rows, std::uint64_t end, __m512i shift) {
     const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
-    const __m512i shift = _mm512_set1_epi32(int(end & 31));
     return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), shift);
+  }
+  static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
+    return funnel(rows, end, _mm512_set1_epi32(int(end & 31)));
   }
   // Keeps the shift in a vector and adds the width at each step: the funnel shift reads only the
   // count's low 5 bits, so the count may run past 31, and no scalar goes to a vector per step.
@@ -193,8 +206,7 @@ struct FunnelShift {
     __m512i next() {
       m_end += m_width;
       m_shift = _mm512_add_epi32(m_shift, m_step);
-      const std::uint32_t* r = m_rows + (m_end >> 5) * kLaneBlock;
-      return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), m_shift);
+      return funnel(m_rows, m_end, m_shift);
     }
     std::uint64_t end() const { return m_end; }
 
@@ -250,9 +262,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     };
     const std::uint32_t w1 = lane_width_1(L, c);
     std::uint64_t end = L.bit_start[c] + fw;
-    BlockRows exceptions{L.exception_steps.data(), L.exception_lanes.data(), L.highs.data(), L.row_start[c],
-                         L.row_start[c + 1],       L.high_start[c],          0};
-    exceptions.next = next_exception_step(exceptions.steps, exceptions.row, exceptions.row_end);
+    BlockRows exceptions = BlockRows::of(L, c);
     float* out = window + c * kLaneBlock;
     __m512i k = first512<Bits>(rows, end, fw);
     put(out, values512(lo, step, k));

@@ -245,12 +245,11 @@ SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
   return f;
 }
 
-// Builds `f`'s first window as lane blocks with or without the transient width, with the
-// quantiser encode_window chose for it.
-EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, bool transient_width) {
-  EncodedPage page = testing::encode(f, 0, n, CodecParams{}, 1e-3f * f.range());
-  EXPECT_EQ(page.method, PageMethod::predictive_lanes);
+// Codes `f`'s first page.step_count steps as page's lane blocks, with its quantiser, with or
+// without the transient width, and derives their tables.
+void build_lanes(const SyntheticField& f, EncodedPage& page, bool transient_width = true) {
   const std::uint64_t N = f.vertices;
+  const std::uint32_t n = page.step_count;
   page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, page.step, page.bound, page.first_width,
                                          [&](std::uint64_t first, std::uint64_t count, float* x) {
                                            for (std::uint64_t v = 0; v < count; ++v)
@@ -259,6 +258,14 @@ EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, bool transient_w
                                          },
                                          transient_width);
   EXPECT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
+}
+
+// Builds `f`'s first window as lane blocks with or without the transient width, with the
+// quantiser encode_window chose for it.
+EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, bool transient_width) {
+  EncodedPage page = testing::encode(f, 0, n, CodecParams{}, 1e-3f * f.range());
+  EXPECT_EQ(page.method, PageMethod::predictive_lanes);
+  build_lanes(f, page, transient_width);
   return page;
 }
 
@@ -309,12 +316,7 @@ EncodedPage exact_lane_page(SyntheticField& f, std::uint32_t n) {
   page.step = 1;
   page.bound = 0.5f;
   page.first_width = 12;
-  page.lanes = detail::build_lane_blocks(N, n, n, page.lo, page.step, page.bound, page.first_width,
-                                         [&](std::uint64_t first, std::uint64_t count, float* x) {
-                                           for (std::uint64_t v = 0; v < count; ++v)
-                                             for (std::uint32_t t = 0; t < n; ++t) x[v * n + t] = f.values[std::uint64_t(t) * N + first + v];
-                                         });
-  EXPECT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
+  build_lanes(f, page);
   return page;
 }
 
