@@ -7,20 +7,21 @@
 // bit_start[b] of every column and holds there, in each lane, for a page of n steps:
 //   k_0         first_width bits (the page's), k_0 itself
 //   step 1      w1 bits: k_1 - k_0 in two's complement (width 0: the difference is 0)
-//   step t >= 2 k_t - prediction_t in v bits, two's complement: v = w2 for the transient steps
-//               2 .. kLaneTransientEnd - 1, v = w after them; the prediction is
-//               2 k_{t-1} - k_{t-2} in `linear` lanes and k_{t-1} in the others
+//   step t >= 2 k_t - prediction_t in v bits, two's complement: v = w2 at step 2, w3 for the
+//               transient steps 3 .. T - 1, w from the block's transient end T on; the
+//               prediction is 2 k_{t-1} - k_{t-2} in `linear` lanes and k_{t-1} in the others
 // Blocks follow each other without gaps (lane_block_bits gives a block's bits). A run's first
-// steps often jump further than its later ones, so step 1 and the transient steps have widths of
-// their own. A difference d too wide for its step's width is an exception: the block lists the
-// step's row (step, lanes), and the high part h = (d - s) / 2^width, s being the slot's low bits
-// as a signed value, zigzag-coded at the block's exception width x, follows in exception_bits.
-// Raw lanes (values that lo + k step cannot hold within the bound) read 0 in every slot and take
-// their n exact floats from raw_values. All integer arithmetic wraps in 32 bits, so that the
-// scalar and the vector decoders agree exactly.
-// Format version 3 had no transient width, and its slots held d + 2^(v-1) (offset binary) with
-// the same high parts: its pages are read with w2 = w and each slot's top bit flipped
-// (page_format.cpp).
+// steps often jump further than its later ones, and by how much and for how long differs from
+// block to block, so steps 1 and 2 have widths of their own and each block chooses where its
+// transient ends. A difference d too wide for its step's width is an exception: the block lists
+// the step's row (step, lanes), and the high part h = (d - s) / 2^width, s being the slot's low
+// bits as a signed value, zigzag-coded at the block's exception width x, follows in
+// exception_bits. Raw lanes (values that lo + k step cannot hold within the bound) read 0 in
+// every slot and take their n exact floats from raw_values. All integer arithmetic wraps in 32
+// bits, so that the scalar and the vector decoders agree exactly.
+// Older formats are read into this layout (page_format.cpp): version 4 had one width for steps
+// 2 .. 5 and T = 6 for every block; version 3 one width for every step after step 1, and slots in
+// offset binary (d + 2^(v-1)).
 #pragma once
 #include <algorithm>
 #include <array>
@@ -61,39 +62,39 @@ inline std::uint16_t lane_block_mask(std::uint64_t vertices, std::uint64_t b) {
   return std::uint16_t(lanes == kLaneBlock ? 0xFFFF : (1u << lanes) - 1);
 }
 
-/// The steps after step 1 that take the transient width w2: 2 .. kLaneTransientEnd - 1.
-constexpr std::uint32_t kLaneTransientEnd = 6;
-
-/// A block's widths, in this order: step 1's, the transient steps', the later steps', the high
-/// parts'. Format version 3 stored three, without the transient one.
-constexpr std::uint64_t kLaneWidths = 4;
+/// A block's widths, in this order: step 1's, step 2's, the transient steps', the later steps',
+/// the high parts'.
+constexpr std::uint64_t kLaneWidths = 5;
 inline std::uint32_t lane_width_1(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b]; }
 inline std::uint32_t lane_width_2(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 1]; }
-inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 2]; }
-inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 3]; }
+inline std::uint32_t lane_transient_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 2]; }
+inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 3]; }
+inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 4]; }
 
-/// Steps of an n-step page at the transient width, and after it.
-inline std::uint32_t lane_transient_steps(std::uint32_t steps) {
-  return std::min(steps, kLaneTransientEnd) - std::min(steps, 2u);
-}
-inline std::uint32_t lane_later_steps(std::uint32_t steps) { return steps - std::min(steps, kLaneTransientEnd); }
+/// Where an n-step page's transient steps start: step 3, or n if it has fewer steps.
+inline std::uint32_t lane_transient_start(std::uint32_t steps) { return std::min(steps, 3u); }
 
 /// A run of a block's steps after step 1 that share one width: [from, to).
 struct LaneStepSpan {
   std::uint32_t from, to, width;
 };
 
-/// Block b's steps after step 1 in an n-step page: the transient steps, then the later ones.
-inline std::array<LaneStepSpan, 2> lane_step_spans(const LaneBlocks& L, std::uint64_t b, std::uint32_t steps) {
-  const std::uint32_t transient_end = std::min(steps, kLaneTransientEnd);
-  return {{{2, transient_end, lane_width_2(L, b)}, {transient_end, steps, lane_width(L, b)}}};
+/// Block b's steps after step 1 in an n-step page: step 2, the transient steps, the later ones.
+inline std::array<LaneStepSpan, 3> lane_step_spans(const LaneBlocks& L, std::uint64_t b, std::uint32_t steps) {
+  const std::uint32_t start = lane_transient_start(steps), end = L.transient_ends[b];
+  return {{{std::min(steps, 2u), start, lane_width_2(L, b)}, {start, end, lane_transient_width(L, b)},
+           {end, steps, lane_width(L, b)}}};
 }
 
-/// Bits a block takes in each column.
-inline std::uint64_t lane_block_bits(std::uint32_t first_width, std::uint32_t w1, std::uint32_t w2, std::uint32_t w,
-                                     std::uint32_t steps) {
-  return first_width + (steps >= 2 ? w1 : 0) + std::uint64_t(lane_transient_steps(steps)) * w2 +
-         std::uint64_t(lane_later_steps(steps)) * w;
+/// What is wrong with block b's widths and transient end for an n-step page (none over 32 bits,
+/// the transient end in [min(n, 3), n], no width for a span without steps), or nullptr.
+const char* lane_block_layout_error(const LaneBlocks& L, std::uint64_t b, std::uint32_t steps);
+
+/// Bits block b (its layout valid) takes in each column.
+inline std::uint64_t lane_block_bits(const LaneBlocks& L, std::uint64_t b, std::uint32_t first_width, std::uint32_t steps) {
+  std::uint64_t bits = first_width + (steps >= 2 ? lane_width_1(L, b) : 0);
+  for (const LaneStepSpan& s : lane_step_spans(L, b, steps)) bits += std::uint64_t(s.to - s.from) * s.width;
+  return bits;
 }
 
 inline std::uint32_t low_mask(std::uint32_t width) { return width >= 32 ? ~0u : (1u << width) - 1; }
@@ -121,7 +122,8 @@ struct LaneBlockState {
 
 /// The width of block b's slots at step t >= 1.
 inline std::uint32_t lane_step_width(const LaneBlocks& L, std::uint64_t b, std::uint32_t t) {
-  return t == 1 ? lane_width_1(L, b) : t < kLaneTransientEnd ? lane_width_2(L, b) : lane_width(L, b);
+  if (t <= 2) return t == 1 ? lane_width_1(L, b) : lane_width_2(L, b);
+  return t < L.transient_ends[b] ? lane_transient_width(L, b) : lane_width(L, b);
 }
 
 /// True when block b's next exception row (from state s) is at the step s is about to decode.
@@ -168,15 +170,21 @@ void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, st
 /// Vertex v's whole window.
 void lane_blocks_vertex(const EncodedPage& p, std::uint64_t v, float* out);
 
+/// How an encoder lays out a block's steps after step 1: as this format chooses them, or in a
+/// layout an older format can hold (tests write such pages).
+enum class LaneLayout {
+  chosen,             ///< steps 2, 3 .. T - 1 and T .. n - 1 each at the width with the fewest bits, T per block
+  transient_to_6,     ///< one width for steps 2 .. 5, one for the rest (format version 4)
+  one_after_step_1,   ///< one width for every step after step 1 (format version 3)
+};
+
 /// Encodes a window of N vertices into lane blocks. gather(first, count, x) writes vertices
 /// [first, first + count) to x, `window` floats each (the first `steps` meaningful). The
-/// derived tables are left empty: lane_blocks_error derives them, as for a parsed page. Without
-/// `transient_width`, the transient steps take the later steps' width (w2 = w, the layout format
-/// version 3 can hold).
+/// derived tables are left empty: lane_blocks_error derives them, as for a parsed page.
 LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
                              float bound, std::uint32_t first_width,
                              const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather,
-                             bool transient_width = true);
+                             LaneLayout layout = LaneLayout::chosen);
 
 /// Checks a predictive_lanes page's tables value by value (they must describe exactly the bits
 /// and values stored, within their arrays) and derives bit_start, raw_start, row_start,

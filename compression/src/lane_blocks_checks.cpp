@@ -13,13 +13,25 @@ std::string at_block(const char* what, std::uint64_t b) { return std::string(wha
 
 }  // namespace
 
+const char* lane_block_layout_error(const LaneBlocks& L, std::uint64_t b, std::uint32_t steps) {
+  for (std::uint64_t i = 0; i < kLaneWidths; ++i)
+    if (L.widths[kLaneWidths * b + i] > 32) return "width over 32 bits";
+  const std::uint32_t end = L.transient_ends[b];
+  if (end < lane_transient_start(steps) || end > steps) return "transient end outside the window's steps";
+  if (steps < 2 && lane_width_1(L, b) != 0) return "width for a step the page does not have";
+  for (const LaneStepSpan& s : lane_step_spans(L, b, steps))
+    if (s.from == s.to && s.width != 0) return "width for a step the page does not have";
+  return nullptr;
+}
+
 std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count, B = lane_block_count(N);
   const std::uint32_t n = p.step_count;
   if (p.first_width < 1 || p.first_width > 31) return "first-value width " + std::to_string(p.first_width) + " outside 1..31";
   if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
-  if (L.widths.size() != kLaneWidths * B || L.linear.size() != B || L.raw.size() != B || L.exception_rows.size() != B)
+  if (L.widths.size() != kLaneWidths * B || L.transient_ends.size() != B || L.linear.size() != B || L.raw.size() != B ||
+      L.exception_rows.size() != B)
     return "lane block tables do not have one entry per block of 16 vertices";
   LaneBlocks d;
   d.bit_start.resize(B + 1);
@@ -32,15 +44,12 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
     d.raw_start[b] = raw;
     d.row_start[b] = rows;
     d.high_start[b] = highs;
-    const std::uint32_t w1 = lane_width_1(L, b), w2 = lane_width_2(L, b), w = lane_width(L, b);
+    if (const char* error = lane_block_layout_error(L, b, n)) return at_block(error, b);
     const std::uint32_t x = lane_exception_width(L, b);
-    if (w1 > 32 || w2 > 32 || w > 32 || x > 32) return at_block("width over 32 bits", b);
-    if ((n < 2 && w1 != 0) || (!lane_transient_steps(n) && w2 != 0) || (!lane_later_steps(n) && w != 0))
-      return at_block("width for a step the page does not have", b);
     // Lanes past the last vertex are padding: nothing may be stored for them.
     const std::uint16_t mask = lane_block_mask(N, b);
     if ((L.linear[b] & ~mask) || (L.raw[b] & ~mask)) return at_block("predictor or raw flag on a padding lane", b);
-    bits += lane_block_bits(p.first_width, w1, w2, w, n);
+    bits += lane_block_bits(L, b, p.first_width, n);
     raw += std::uint64_t(std::popcount(L.raw[b])) * n;
     const std::uint64_t row_end = rows + L.exception_rows[b];
     if (row_end > L.exception_steps.size() || row_end > L.exception_lanes.size())

@@ -20,7 +20,7 @@ std::uint32_t signed_width(std::int32_t d) {
 // One chunk's blocks, with its columns starting at bit 0 (placed at their offset when joined).
 struct Chunk {
   std::vector<std::uint8_t> widths;
-  std::vector<std::uint16_t> linear, raw, exception_rows, exception_steps, exception_lanes;
+  std::vector<std::uint16_t> transient_ends, linear, raw, exception_rows, exception_steps, exception_lanes;
   std::vector<std::uint32_t> highs;  // zigzag high parts, each at its block's width
   std::vector<float> raw_values;
   std::vector<std::uint32_t> words;
@@ -43,39 +43,110 @@ constexpr std::uint64_t kChunkBlocks = 64;
 struct Quantiser {
   std::uint32_t steps, window, first_width;
   float lo, step, bound;
-  bool transient_width;
+  LaneLayout layout;
 };
 
-// The width for steps [a, e) of a block's errors d[l * n + t] with the fewest bits, counting each
-// exception row (32 bits) and high part (at most wmax - w + 1 bits); 0 for no steps.
-std::uint32_t cheapest_width(const std::int32_t* d, std::uint32_t n, std::uint32_t a, std::uint32_t e) {
-  if (e <= a) return 0;
-  std::uint64_t histogram[34] = {}, step_max[34] = {};
-  std::uint32_t wmax = 0;
-  for (std::uint32_t t = a; t < e; ++t) {
-    std::uint32_t m = 0;
-    for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
-      const std::uint32_t s = signed_width(d[l * n + t]);
-      ++histogram[s];
-      m = std::max(m, s);
+// What an exception row is priced at when a span's width is chosen. It stores 32 bits (step and
+// lanes) and a high part per lane, but each row also breaks the decoder's step loop (a load of
+// its lanes, an expand, a test per step of its span): priced at its 32 stored bits, mug-diffused
+// at 1e-3 kept 655 rows and decoded 1.4-1.6 times slower than with their work skipped; at 128
+// bits, with T chosen per block, 21 rows for 1 % more bits.
+constexpr std::uint64_t kRowPriceBits = 128;
+
+// A block's errors d[l * n + t] counted per step, as sums over steps [0, t), so that the cheapest
+// width of any span of steps costs O(33) whatever its length:
+//   wider[t][c]: slots wider than c bits; rows[t][c]: steps whose widest slot is wider than c.
+class SpanCosts {
+ public:
+  static constexpr std::uint32_t kWidths = 33;  // a slot's signed width is 0..32
+  struct Choice {
+    std::uint32_t width;
+    std::uint64_t bits;
+  };
+
+  void count(const std::int32_t* d, std::uint32_t n) {
+    m_wider.assign(std::size_t(n + 1) * kWidths, 0);
+    m_rows.assign(std::size_t(n + 1) * kWidths, 0);
+    for (std::uint32_t t = 0; t < n; ++t) {
+      std::uint32_t histogram[kWidths + 1] = {}, widest = 0;
+      for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
+        const std::uint32_t s = signed_width(d[l * n + t]);
+        ++histogram[s];
+        widest = std::max(widest, s);
+      }
+      const std::uint32_t* wider = &m_wider[std::size_t(t) * kWidths];
+      const std::uint32_t* rows = &m_rows[std::size_t(t) * kWidths];
+      std::uint32_t* next_wider = &m_wider[std::size_t(t + 1) * kWidths];
+      std::uint32_t* next_rows = &m_rows[std::size_t(t + 1) * kWidths];
+      std::uint32_t above = 0;
+      for (std::uint32_t c = kWidths; c-- > 0;) {
+        above += histogram[c + 1];
+        next_wider[c] = wider[c] + above;
+        next_rows[c] = rows[c] + (widest > c);
+      }
     }
-    ++step_max[m];
-    wmax = std::max(wmax, m);
   }
-  std::uint32_t w = wmax;
-  std::uint64_t best = ~0ull;
-  for (std::uint32_t c_w = 0; c_w <= wmax; ++c_w) {
-    std::uint64_t exceptions = 0, rows = 0;
-    for (std::uint32_t s = c_w + 1; s <= wmax; ++s) exceptions += histogram[s], rows += step_max[s];
-    const std::uint64_t bits = kLaneBlock * std::uint64_t(e - a) * c_w + 32 * rows + exceptions * (wmax - c_w + 1);
-    if (bits < best) best = bits, w = c_w;
+
+  // The width for steps [a, e) with the fewest bits, counting each exception row at
+  // kRowPriceBits and each high part at its most (wmax - w + 1 bits); width 0 for no steps.
+  Choice cheapest(std::uint32_t a, std::uint32_t e) const {
+    if (e <= a) return {0, 0};
+    const std::uint32_t *wider_a = &m_wider[std::size_t(a) * kWidths], *wider_e = &m_wider[std::size_t(e) * kWidths];
+    const std::uint32_t *rows_a = &m_rows[std::size_t(a) * kWidths], *rows_e = &m_rows[std::size_t(e) * kWidths];
+    std::uint32_t wmax = 0;
+    while (rows_e[wmax] != rows_a[wmax]) ++wmax;  // no step wider than wmax (rows[.][32] is 0)
+    Choice best{wmax, ~0ull};
+    for (std::uint32_t c = 0; c <= wmax; ++c) {
+      const std::uint64_t exceptions = wider_e[c] - wider_a[c], rows = rows_e[c] - rows_a[c];
+      const std::uint64_t bits = kLaneBlock * std::uint64_t(e - a) * c + kRowPriceBits * rows + exceptions * (wmax - c + 1);
+      if (bits < best.bits) best = {c, bits};
+    }
+    return best;
   }
-  return w;
+
+ private:
+  std::vector<std::uint32_t> m_wider, m_rows;
+};
+
+// The latest transient end the encoder tries before the window's own end: a run's transient lies
+// in its first steps, and trying every end of a 1024-step window would cost more than the rest
+// of the block's encoding.
+constexpr std::uint32_t kLaneTransientSearch = 64;
+
+// A block's widths after step 1 and its transient end.
+struct BlockLayout {
+  std::uint32_t w2, w3, w, end;
+};
+
+BlockLayout choose_layout(const SpanCosts& costs, std::uint32_t n, LaneLayout layout) {
+  const std::uint32_t start = lane_transient_start(n);
+  if (layout != LaneLayout::chosen) {
+    // Format version 4's transient steps 2 .. 5 (version 3: every step) share one width.
+    const std::uint32_t end = std::min(n, 6u), shared_end = layout == LaneLayout::transient_to_6 ? end : n;
+    const std::uint32_t shared = costs.cheapest(std::min(n, 2u), shared_end).width;
+    const std::uint32_t later = layout == LaneLayout::transient_to_6 ? costs.cheapest(end, n).width : shared;
+    return {n > 2 ? shared : 0, end > 3 ? shared : 0, end < n ? later : 0, end};
+  }
+  // Each transient end up to kLaneTransientSearch, and the window's end: two spans' cheapest
+  // widths each; the fewest bits win, the earliest end on a tie.
+  BlockLayout best{costs.cheapest(std::min(n, 2u), start).width, 0, 0, start};
+  std::uint64_t fewest = ~0ull;
+  const auto consider = [&](std::uint32_t end) {
+    const SpanCosts::Choice transient = costs.cheapest(start, end), later = costs.cheapest(end, n);
+    if (transient.bits + later.bits < fewest) {
+      fewest = transient.bits + later.bits;
+      best.w3 = transient.width, best.w = later.width, best.end = end;
+    }
+  };
+  const std::uint32_t last = std::min(n, kLaneTransientSearch);
+  for (std::uint32_t end = start; end <= last; ++end) consider(end);
+  if (last < n) consider(n);
+  return best;
 }
 
 // Encodes one block of `lanes` vertices (x: their windows, q.window floats apart) into c.
 void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk& c, std::vector<std::int32_t>& d,
-                  std::vector<std::uint32_t>& kk) {
+                  std::vector<std::uint32_t>& kk, SpanCosts& costs) {
   const std::uint32_t n = q.steps, fw = q.first_width;
   const float lo = q.lo, step = q.step, bound = q.bound;
   // k_0 per lane and each step's difference from its prediction, d[l * n + t]; raw lanes and
@@ -112,14 +183,13 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
       d[l * n + t] = std::int32_t(kk[t] - prediction);
     }
   }
-  // Step 1 gets the width of its widest lane, the transient and the later steps each the width
-  // with the fewest bits over their steps.
+  // Step 1 gets the width of its widest lane; step 2, the transient steps and the later ones each
+  // the width with the fewest bits over their steps.
   std::uint32_t w1 = 0;
   if (n >= 2)
     for (std::uint64_t l = 0; l < kLaneBlock; ++l) w1 = std::max(w1, signed_width(d[l * n + 1]));
-  const std::uint32_t transient_end = std::min(n, kLaneTransientEnd);
-  const std::uint32_t w2 = cheapest_width(d.data(), n, 2, q.transient_width ? transient_end : n);
-  const std::uint32_t w = !lane_later_steps(n) ? 0 : q.transient_width ? cheapest_width(d.data(), n, transient_end, n) : w2;
+  costs.count(d.data(), n);
+  const BlockLayout layout = choose_layout(costs, n, q.layout);
   // Slots, exception rows and high parts.
   std::uint64_t pos = c.bits;
   for (std::uint64_t l = 0; l < kLaneBlock; ++l) c.put(std::uint32_t(l), pos, fw, k0[l]);
@@ -127,7 +197,7 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
   std::uint32_t high_width = 0;
   const std::size_t rows_before = c.exception_steps.size();
   for (std::uint32_t t = 1; t < n; ++t) {
-    const std::uint32_t width = t == 1 ? w1 : t < kLaneTransientEnd ? w2 : w;
+    const std::uint32_t width = t == 1 ? w1 : t == 2 ? layout.w2 : t < layout.end ? layout.w3 : layout.w;
     std::uint16_t lanes = 0;
     for (std::uint64_t l = 0; l < kLaneBlock; ++l) {
       const std::int32_t error = d[l * n + t];
@@ -149,7 +219,9 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
     pos += width;
   }
   c.exception_rows.push_back(std::uint16_t(c.exception_steps.size() - rows_before));
-  c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(w2), std::uint8_t(w), std::uint8_t(high_width)});
+  c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(layout.w2), std::uint8_t(layout.w3),
+                                   std::uint8_t(layout.w), std::uint8_t(high_width)});
+  c.transient_ends.push_back(std::uint16_t(layout.end));
   c.linear.push_back(linear);
   c.raw.push_back(raw);
   c.bits = pos;
@@ -160,21 +232,22 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
 LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t window, float lo, float step,
                              float bound, std::uint32_t first_width,
                              const std::function<void(std::uint64_t, std::uint64_t, float*)>& gather,
-                             bool transient_width) {
+                             LaneLayout layout) {
   const std::uint64_t B = lane_block_count(N), chunks = (B + kChunkBlocks - 1) / kChunkBlocks;
-  const Quantiser q{steps, window, first_width, lo, step, bound, transient_width};
+  const Quantiser q{steps, window, first_width, lo, step, bound, layout};
   std::vector<Chunk> done(chunks);
   parallel_for(chunks, 1, [&](std::size_t c0, std::size_t c1) {
     thread_local std::vector<float> x;
     thread_local std::vector<std::int32_t> d;
     thread_local std::vector<std::uint32_t> k;
+    thread_local SpanCosts costs;
     for (std::size_t c = c0; c < c1; ++c) {
       Chunk& chunk = done[c];
       const std::uint64_t first = c * kChunkBlocks * kLaneBlock, count = std::min(N - first, kChunkBlocks * kLaneBlock);
       x.resize(count * window);
       gather(first, count, x.data());
       for (std::uint64_t v = 0; v < count; v += kLaneBlock)
-        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), q, chunk, d, k);
+        encode_block(x.data() + v * window, std::min<std::uint64_t>(kLaneBlock, count - v), q, chunk, d, k, costs);
     }
   });
   // Join: tables concatenated, each chunk's columns ORed in at its bit offset, high parts packed.
@@ -189,6 +262,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
   std::uint64_t at = 0;
   for (const Chunk& c : done) {
     L.widths.insert(L.widths.end(), c.widths.begin(), c.widths.end());
+    L.transient_ends.insert(L.transient_ends.end(), c.transient_ends.begin(), c.transient_ends.end());
     L.linear.insert(L.linear.end(), c.linear.begin(), c.linear.end());
     L.raw.insert(L.raw.end(), c.raw.begin(), c.raw.end());
     L.exception_rows.insert(L.exception_rows.end(), c.exception_rows.begin(), c.exception_rows.end());
@@ -197,7 +271,7 @@ LaneBlocks build_lane_blocks(std::uint64_t N, std::uint32_t steps, std::uint32_t
     L.raw_values.insert(L.raw_values.end(), c.raw_values.begin(), c.raw_values.end());
     std::size_t h = 0, r = 0;
     for (std::size_t b = 0; b < c.linear.size(); ++b) {
-      const std::uint32_t x = c.widths[kLaneWidths * b + 3];
+      const std::uint32_t x = c.widths[kLaneWidths * b + 4];
       for (std::uint32_t e = 0; e < c.exception_rows[b]; ++e, ++r)
         for (int lane = std::popcount(c.exception_lanes[r]); lane > 0; --lane) high_writer.put(c.highs[h++], x);
     }

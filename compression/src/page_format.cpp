@@ -36,36 +36,52 @@ void get_quantiser(ByteReader& r, EncodedPage& p) {
   r.get<std::uint32_t>();
 }
 
-// Format version 3 stored three widths a block: step 1's, one for every later step, the high
-// parts'. In memory its later width serves the transient steps too (and none past them when
-// the page has none).
-constexpr std::uint64_t kVersion3LaneWidths = 3;
+// Format versions 3 and 4 stored fewer widths a block and no transient end: version 4 four
+// (step 1's, steps 2-5's, the later steps', the high parts'), version 3 three (step 1's, every
+// later step's, the high parts'). Their blocks read into this layout with their transient steps
+// ending at step 6, or the window's end.
+constexpr std::uint32_t kOlderTransientEnd = 6;
+std::uint64_t older_lane_widths(std::uint32_t version) { return version >= 4 ? 4 : 3; }
 
-void get_lane_widths(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_t steps, std::uint32_t version) {
-  if (version >= 4) return r.get_array(L.widths, kLaneWidths * B);
+void get_lane_layout(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_t steps, std::uint32_t version) {
+  if (version >= 5) {
+    r.get_array(L.widths, kLaneWidths * B);
+    return r.get_array(L.transient_ends, B);
+  }
+  const std::uint64_t stored_widths = older_lane_widths(version);
+  const std::uint32_t end = std::min(steps, kOlderTransientEnd);
   std::vector<std::uint8_t> stored;
-  r.get_array(stored, kVersion3LaneWidths * B);
+  r.get_array(stored, stored_widths * B);
   L.widths.resize(kLaneWidths * B);
+  L.transient_ends.assign(B, std::uint16_t(end));
   for (std::uint64_t b = 0; b < B; ++b) {
-    const std::uint8_t* s = stored.data() + kVersion3LaneWidths * b;
-    const std::uint8_t later = lane_later_steps(steps) ? s[1] : 0;
-    const std::uint8_t widths[kLaneWidths] = {s[0], s[1], later, s[2]};
+    const std::uint8_t* s = stored.data() + stored_widths * b;
+    const std::uint8_t early = s[1], later = version >= 4 ? s[2] : end < steps ? s[1] : 0;
+    const std::uint8_t widths[kLaneWidths] = {s[0], early, end > 3 ? early : std::uint8_t(0), later, s[stored_widths - 1]};
     std::copy(widths, widths + kLaneWidths, L.widths.begin() + std::ptrdiff_t(kLaneWidths * b));
   }
 }
 
-void put_lane_widths(ByteWriter& w, const EncodedPage& p, std::uint32_t version) {
+void put_lane_layout(ByteWriter& w, const EncodedPage& p, std::uint32_t version) {
   const LaneBlocks& L = p.lanes;
-  if (version >= 4) return w.put_array(L.widths);
-  std::vector<std::uint8_t> stored(kVersion3LaneWidths * L.block_count());
+  if (version >= 5) {
+    w.put_array(L.widths);
+    return w.put_array(L.transient_ends);
+  }
+  const std::uint64_t stored_widths = older_lane_widths(version);
+  const std::uint32_t n = p.step_count, end = std::min(n, kOlderTransientEnd);
+  std::vector<std::uint8_t> stored(stored_widths * L.block_count());
   for (std::uint64_t b = 0; b < L.block_count(); ++b) {
-    const std::uint32_t w2 = lane_width_2(L, b), later = lane_width(L, b);
-    if (lane_later_steps(p.step_count) && later != w2)
-      throw Error(ErrorCode::invalid_argument, "format version 3 cannot hold a lane block's transient width (block " +
-                                                   std::to_string(b) + ")");
-    stored[kVersion3LaneWidths * b] = lane_width_1(L, b) & 0xFF;
-    stored[kVersion3LaneWidths * b + 1] = std::uint8_t(w2);
-    stored[kVersion3LaneWidths * b + 2] = lane_exception_width(L, b) & 0xFF;
+    const std::uint32_t w2 = lane_width_2(L, b), w3 = lane_transient_width(L, b), later = lane_width(L, b);
+    const bool fits = L.transient_ends[b] == end && (end <= 3 || w3 == w2) && (version >= 4 || end == n || later == w2);
+    if (!fits)
+      throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(version) +
+                                                   " cannot hold a lane block's widths (block " + std::to_string(b) + ")");
+    std::uint8_t* s = stored.data() + stored_widths * b;
+    s[0] = lane_width_1(L, b) & 0xFF;
+    s[1] = std::uint8_t(w2);
+    if (version >= 4) s[2] = std::uint8_t(later);
+    s[stored_widths - 1] = lane_exception_width(L, b) & 0xFF;
   }
   w.put_array(stored);
 }
@@ -96,7 +112,7 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   get_quantiser(r, p);
   if (p.first_width < 1 || p.first_width > 31) r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
   const std::uint64_t B = lane_block_count(p.vertex_count);
-  get_lane_widths(r, L, B, p.step_count, version);
+  get_lane_layout(r, L, B, p.step_count, version);
   r.get_array(L.linear, B);
   r.get_array(L.raw, B);
   r.get_array(L.exception_rows, B);
@@ -104,10 +120,9 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   for (std::uint64_t b = 0; b < B; ++b) {
     rows += L.exception_rows[b];
     raw += std::uint64_t(std::popcount(L.raw[b])) * p.step_count;
-    const std::uint32_t w1 = lane_width_1(L, b), w2 = lane_width_2(L, b), w = lane_width(L, b);
-    if (w1 > 32 || w2 > 32 || w > 32 || lane_exception_width(L, b) > 32)
-      r.fail("lane block width over 32 bits at block " + std::to_string(b));
-    bits += lane_block_bits(p.first_width, w1, w2, w, p.step_count);
+    if (const char* error = lane_block_layout_error(L, b, p.step_count))
+      r.fail(std::string(error) + " at lane block " + std::to_string(b));
+    bits += lane_block_bits(L, b, p.first_width, p.step_count);
   }
   r.get_array(L.exception_steps, rows);
   r.get_array(L.exception_lanes, rows);
@@ -128,7 +143,7 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
 
 std::uint32_t max_method_of_version(std::uint32_t version) {
   // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods,
-  // version 3 predictive_lanes (version 4 changed its layout).
+  // version 3 predictive_lanes (versions 4 and 5 changed its layout).
   if (version >= 3) return kMaxMethod;
   return version >= 2 ? std::uint32_t(PageMethod::vq_aligned_residual) : std::uint32_t(PageMethod::predictive);
 }
@@ -170,7 +185,7 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   if (p.method == PageMethod::predictive_lanes) {
     const LaneBlocks& L = p.lanes;
     put_quantiser(w, p);
-    put_lane_widths(w, p, format_version);
+    put_lane_layout(w, p, format_version);
     w.put_array(L.linear);
     w.put_array(L.raw);
     w.put_array(L.exception_rows);

@@ -330,6 +330,7 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
     const LaneBlocks& L = p.lanes;
     const std::uint64_t B = lane_block_count(N);
     sized(L.widths.size(), kLaneWidths * B, "lane widths");
+    sized(L.transient_ends.size(), B, "lane transient ends");
     for (const auto* table : {&L.linear, &L.raw, &L.exception_rows}) sized(table->size(), B, "lane block table");
     for (const auto* starts : {&L.bit_start, &L.raw_start, &L.row_start, &L.high_start})
       sized(starts->size(), B + 1, "lane block starts");

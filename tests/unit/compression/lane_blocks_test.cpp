@@ -87,7 +87,8 @@ TEST(LaneBlocks, EveryPathHoldsTheBoundOnHardWindows) {
     const float bound = 1e-2f * noise.range();
     const auto page = testing::encode(noise, 0, n, CodecParams{}, bound);
     expect_paths_agree(noise, n, page, "noise, " + std::to_string(n) + " steps");
-    if (n >= 3) EXPECT_GT(page.lanes.exception_steps.size(), 0u) << "outliers should be exceptions";
+    // A page of 3 steps holds its outliers in step 2's width (a row is priced above most widths).
+    if (n >= 21) EXPECT_GT(page.lanes.exception_steps.size(), 0u) << "outliers should be exceptions";
   }
   // Fewer vertices than one block.
   const auto few = testing::white_noise(5, 9);
@@ -170,11 +171,24 @@ TEST(LaneBlocks, ValidatePageFindsFaultsInTheTables) {
     testing::expect_error([&] { validate_page(bad); }, ErrorCode::invalid_argument, {what}, what);
   };
   EncodedPage bad = good;
-  bad.lanes.widths[detail::kLaneWidths + 2] = 33;  // block 1's later steps
+  bad.lanes.widths[detail::kLaneWidths + 3] = 33;  // block 1's later steps
   expect_invalid(bad, "width over 32 bits at lane block 1");
   bad = good;
-  bad.lanes.widths[detail::kLaneWidths + 1] = 33;  // block 1's transient steps
+  bad.lanes.widths[detail::kLaneWidths + 1] = 33;  // block 1's step 2
   expect_invalid(bad, "width over 32 bits at lane block 1");
+  bad = good;
+  bad.lanes.transient_ends[1] = 17;  // past the page's 16 steps
+  expect_invalid(bad, "transient end outside the window's steps at lane block 1");
+  bad = good;
+  bad.lanes.transient_ends[2] = 2;  // before step 3
+  expect_invalid(bad, "transient end outside the window's steps at lane block 2");
+  bad = good;
+  bad.lanes.transient_ends[0] = 3;  // no transient steps, so no width for them
+  bad.lanes.widths[detail::kLaneWidths * 0 + 2] = 5;
+  expect_invalid(bad, "width for a step the page does not have at lane block 0");
+  bad = good;
+  bad.lanes.transient_ends.pop_back();
+  expect_invalid(bad, "lane transient ends holds 2 values; expected 3");
   bad = good;
   bad.lanes.linear[2] |= 0x8000;  // lane 15 of the last block: past vertex 39
   expect_invalid(bad, "predictor or raw flag on a padding lane at lane block 2");
@@ -219,8 +233,8 @@ TEST(LaneBlocks, FilesRoundTripAndOlderVersionsCannotHoldThem) {
     EXPECT_THROW(CompressedField::open(cut)->verify(), Error) << size << " bytes";
   }
   // A file that says version 2 cannot hold such a page: it is corrupt, not a new page kind. One
-  // that says version 3 holds this version's pages in the wrong layout: corrupt too.
-  for (const std::uint32_t version : {2u, 3u}) {
+  // that says version 3 or 4 holds this version's pages in the wrong layout: corrupt too.
+  for (const std::uint32_t version : {2u, 3u, 4u}) {
     std::vector<char> older = bytes;
     std::uint32_t header_bytes, crc;
     std::memcpy(&header_bytes, older.data() + 12, 4);
@@ -236,18 +250,19 @@ TEST(LaneBlocks, FilesRoundTripAndOlderVersionsCannotHoldThem) {
 // steps get a width of their own.
 SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
   SyntheticField f = testing::white_noise(n, steps, 11);
-  const float start[detail::kLaneTransientEnd] = {0, 30, 10, 40, 5, 25};  // then 20
+  constexpr std::uint32_t kStart = 6;
+  const float start[kStart] = {0, 30, 10, 40, 5, 25};  // then 20
   for (std::uint64_t v = 0; v < n; ++v)
     for (std::uint32_t t = 0; t < steps; ++t) {
       float& x = f.values[std::uint64_t(t) * n + v];
-      x = 0.05f * x + (t < detail::kLaneTransientEnd ? start[t] : 20.f) * float(1 + v % 5);
+      x = 0.05f * x + (t < kStart ? start[t] : 20.f) * float(1 + v % 5);
     }
   return f;
 }
 
-// Codes `f`'s first page.step_count steps as page's lane blocks, with its quantiser, with or
-// without the transient width, and derives their tables.
-void build_lanes(const SyntheticField& f, EncodedPage& page, bool transient_width = true) {
+// Codes `f`'s first page.step_count steps as page's lane blocks, with its quantiser, in `layout`,
+// and derives their tables.
+void build_lanes(const SyntheticField& f, EncodedPage& page, detail::LaneLayout layout = detail::LaneLayout::chosen) {
   const std::uint64_t N = f.vertices;
   const std::uint32_t n = page.step_count;
   page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, page.step, page.bound, page.first_width,
@@ -256,39 +271,55 @@ void build_lanes(const SyntheticField& f, EncodedPage& page, bool transient_widt
                                              for (std::uint32_t t = 0; t < n; ++t)
                                                x[v * page.window + t] = f.values[std::uint64_t(t) * N + first + v];
                                          },
-                                         transient_width);
+                                         layout);
   EXPECT_EQ(detail::lane_blocks_error(page, &page.lanes), "");
 }
 
-// Builds `f`'s first window as lane blocks with or without the transient width, with the
-// quantiser encode_window chose for it.
-EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, bool transient_width) {
+// Builds `f`'s first window as lane blocks in `layout`, with the quantiser encode_window chose
+// for it.
+EncodedPage lane_page(const SyntheticField& f, std::uint32_t n, detail::LaneLayout layout) {
   EncodedPage page = testing::encode(f, 0, n, CodecParams{}, 1e-3f * f.range());
   EXPECT_EQ(page.method, PageMethod::predictive_lanes);
-  build_lanes(f, page, transient_width);
+  build_lanes(f, page, layout);
   return page;
 }
 
 TEST(LaneBlocks, TheTransientStepsTakeAWidthOfTheirOwn) {
   const auto f = transient_field(500, 40);
-  const EncodedPage own = lane_page(f, 40, true), shared = lane_page(f, 40, false);
-  expect_paths_agree(f, 40, own, "transient width");
+  const EncodedPage own = lane_page(f, 40, detail::LaneLayout::chosen);
+  const EncodedPage to_6 = lane_page(f, 40, detail::LaneLayout::transient_to_6);
+  const EncodedPage shared = lane_page(f, 40, detail::LaneLayout::one_after_step_1);
+  expect_paths_agree(f, 40, own, "transient end per block");
+  expect_paths_agree(f, 40, to_6, "transient steps 2-5");
   expect_paths_agree(f, 40, shared, "one width after step 1");
-  // Every full block's transient steps need wider slots than its later ones here (the last
-  // block's 4 lanes may take exception rows instead); with one width for both, the later steps
-  // pay for them or the transient steps become exception rows.
-  for (std::uint64_t b = 0; b < own.lanes.block_count(); ++b) {
-    if (b + 1 < own.lanes.block_count())
-      ASSERT_GT(detail::lane_width_2(own.lanes, b), detail::lane_width(own.lanes, b)) << b;
+  // The field's jumps last until step 6 (its step-6 difference is 5 to 25 times the rest), so
+  // nearly every block ends its transient steps at 7 with wider slots than the later steps'. The
+  // older layouts hold one width for steps 2-5 (and pay for step 6 in the later steps' width or
+  // as exception rows), or one for every step after step 1.
+  const LaneBlocks& L = own.lanes;
+  std::uint64_t at_7 = 0;
+  for (std::uint64_t b = 0; b < L.block_count(); ++b) {
+    if (L.transient_ends[b] == 7) {
+      ++at_7;
+      ASSERT_GT(detail::lane_transient_width(L, b), detail::lane_width(L, b)) << b;
+    }
+    ASSERT_EQ(to_6.lanes.transient_ends[b], 6u) << b;
+    ASSERT_EQ(detail::lane_width_2(to_6.lanes, b), detail::lane_transient_width(to_6.lanes, b)) << b;
     ASSERT_EQ(detail::lane_width_2(shared.lanes, b), detail::lane_width(shared.lanes, b)) << b;
+    ASSERT_EQ(detail::lane_transient_width(shared.lanes, b), detail::lane_width(shared.lanes, b)) << b;
   }
-  EXPECT_LT(detail::serialize_page(own, 0).size(), detail::serialize_page(shared, 0).size());
+  EXPECT_GE(at_7 * 10, L.block_count() * 9) << at_7 << " of " << L.block_count() << " blocks end their transient at step 7";
+  const std::size_t own_bytes = detail::serialize_page(own, 0).size(), to_6_bytes = detail::serialize_page(to_6, 0).size();
+  EXPECT_LT(own_bytes, to_6_bytes);
+  EXPECT_LT(to_6_bytes, detail::serialize_page(shared, 0).size());
 }
 
 // A field of whole numbers coded exactly (step 1, lo 0) as one window of lane blocks, n steps,
 // 56 vertices: block 0 constant; block 1 ramps of slopes 1-3, which the extrapolating predictor
-// holds exactly; block 2 constant but for jumps that stay (steps 3, 10 and 25); and a last block
-// of 8 lanes, ramps and constants. Its later steps (block 2: all but its jumps) take width 0.
+// holds exactly; block 2 constant but for jumps that stay (steps 3, 10 and 25: one lane each, the
+// first by 600, which a row holds in fewer bits than a width of 11 for any span of steps); and a
+// last block of 8 lanes, ramps and constants. Every step after step 1 takes width 0, block 2's
+// jumps are exception rows.
 EncodedPage exact_lane_page(SyntheticField& f, std::uint32_t n) {
   const std::uint64_t N = 56;
   f = SyntheticField{N, n, std::vector<float>(N * n), std::vector<double>(n)};
@@ -300,7 +331,7 @@ EncodedPage exact_lane_page(SyntheticField& f, std::uint32_t n) {
       float x = b == 0 ? float(v) : b == 1 ? ramp : b == 2 ? 1000.f + float(v) : v % 2 ? ramp : 2000.f + float(v);
       if (v == 33 && t >= 10) x += 37;
       if ((v == 40 || v == 41) && t >= 25) x -= 50;
-      if (v == 35 && t >= 3) x += 20;
+      if (v == 35 && t >= 3) x += 600;
       f.values[std::uint64_t(t) * N + v] = x;
     }
   }
@@ -329,7 +360,8 @@ TEST(LaneBlocks, SpansOfWidthZeroHoldOrExtrapolateExactly) {
     const EncodedPage page = exact_lane_page(f, n);
     const LaneBlocks& L = page.lanes;
     ASSERT_EQ(L.block_count(), 4u);
-    for (std::uint64_t b = 0; b < 4; ++b) ASSERT_EQ(detail::lane_width_2(L, b), 0u) << n << " steps, block " << b;
+    for (std::uint64_t b = 0; b < 4; ++b)
+      for (const auto& span : detail::lane_step_spans(L, b, n)) ASSERT_EQ(span.width, 0u) << n << " steps, block " << b;
     ASSERT_EQ(L.linear[1], 0xFFFF) << "ramps extrapolate";
     ASSERT_EQ(L.exception_rows[0] + L.exception_rows[1] + L.exception_rows[3], 0u);
     ASSERT_EQ(L.exception_rows[2], n == 40 ? 3u : 1u) << "the jumps are rows";
@@ -340,48 +372,82 @@ TEST(LaneBlocks, SpansOfWidthZeroHoldOrExtrapolateExactly) {
   }
 }
 
-// Format version 3 held lane blocks without the transient width and with offset-binary slots.
-TEST(LaneBlocks, Version3PagesReadBackAsTheyWereWritten) {
-  for (const std::uint32_t n : {40u, 5u, 2u}) {
-    const auto f = transient_field(333, n);
-    const EncodedPage page = lane_page(f, n, false);
-    const EncodedPage read = through_page_bytes(page, 3);
-    ASSERT_EQ(read.lanes.widths, page.lanes.widths) << n;
-    ASSERT_TRUE(read.lanes.words == page.lanes.words) << n << " steps: slots not turned to two's complement";
-    expect_paths_agree(f, n, read, "version 3, " + std::to_string(n) + " steps");
-    EXPECT_EQ(detail::serialize_page(read, 0, 3), detail::serialize_page(page, 0, 3)) << n;
-  }
-  // A page with a transient width of its own has no version-3 form.
+// Format version 3 held lane blocks with one width for every step after step 1 and with
+// offset-binary slots; version 4 with one width for steps 2-5 and one for the rest. Pages in
+// those layouts go through either version's bytes and back unchanged.
+TEST(LaneBlocks, Version3And4PagesReadBackAsTheyWereWritten) {
+  const std::pair<std::uint32_t, detail::LaneLayout> versions[] = {{3, detail::LaneLayout::one_after_step_1},
+                                                                   {4, detail::LaneLayout::transient_to_6}};
+  for (const auto& [version, layout] : versions)
+    for (const std::uint32_t n : {40u, 5u, 3u, 2u}) {
+      const std::string what = "version " + std::to_string(version) + ", " + std::to_string(n) + " steps";
+      const auto f = transient_field(333, n);
+      const EncodedPage page = lane_page(f, n, layout);
+      const EncodedPage read = through_page_bytes(page, version);
+      ASSERT_EQ(read.lanes.widths, page.lanes.widths) << what;
+      ASSERT_EQ(read.lanes.transient_ends, page.lanes.transient_ends) << what;
+      ASSERT_TRUE(read.lanes.words == page.lanes.words) << what << ": slots not as written";
+      expect_paths_agree(f, n, read, what);
+      EXPECT_EQ(detail::serialize_page(read, 0, version), detail::serialize_page(page, 0, version)) << what;
+    }
+  // A page whose blocks choose their transient ends has no version-3 or -4 form, nor does a page
+  // with steps 2-5 at a width of their own in version 3.
   const auto f = transient_field(333, 40);
-  testing::expect_error([&] { detail::serialize_page(lane_page(f, 40, true), 0, 3); }, ErrorCode::invalid_argument,
-                        {"format version 3 cannot hold"}, "a transient width in version 3");
+  const EncodedPage chosen = lane_page(f, 40, detail::LaneLayout::chosen);
+  for (const std::uint32_t version : {3u, 4u})
+    testing::expect_error([&] { detail::serialize_page(chosen, 0, version); }, ErrorCode::invalid_argument,
+                          {"format version " + std::to_string(version) + " cannot hold"}, "chosen transient ends");
+  testing::expect_error([&] { detail::serialize_page(lane_page(f, 40, detail::LaneLayout::transient_to_6), 0, 3); },
+                        ErrorCode::invalid_argument, {"format version 3 cannot hold"}, "steps 2-5 in version 3");
 }
 
-// A file the build of format version 3 wrote (white_noise(100, 20, 7) with add_outliers, window
-// 16, codebooks of 16, a 1e-2 range-relative bound: two predictive_lanes pages of 16 and 4
-// steps, 28 exception rows), and the values that build read from it.
-TEST(LaneBlocks, Version3FilesReadExactlyAsTheirBuildReadThem) {
+// A file the build of format version `version` wrote, read bit for bit as that build read it
+// (the values it decoded) with every decoder, and within the bound of its source.
+void expect_older_file_reads(const std::string& name, std::uint32_t version, const SyntheticField& source) {
   VectorDecodeGuard guard;
   const std::string dir = PNB_COMPRESSION_TEST_DATA;
-  const auto field = CompressedField::open(dir + "/lanes_v3.pnbf");
-  ASSERT_EQ(field->format_version(), 3u);
+  const auto field = CompressedField::open(dir + "/" + name + ".pnbf");
+  ASSERT_EQ(field->format_version(), version);
   field->verify();
-  const auto expected = testing::read_file(dir + "/lanes_v3_decoded.f32");
-  ASSERT_EQ(expected.size(), 100u * 20 * 4);
-  auto source = testing::white_noise(100, 20, 7);
-  testing::add_outliers(source);
+  const std::uint64_t N = source.vertices;
+  const auto expected = testing::read_file(dir + "/" + name + "_decoded.f32");
+  ASSERT_EQ(expected.size(), N * source.steps * 4);
   for (std::size_t page = 0; page < field->page_count(); ++page)
     ASSERT_EQ(field->load_page(page)->method, PageMethod::predictive_lanes) << page;
-  std::vector<float> step(100);
+  std::vector<float> step(N);
   for (const auto isa : kEveryLaneIsa) {
     detail::cap_lane_isa(isa);
-    for (std::uint64_t t = 0; t < 20; ++t) {
+    for (std::uint64_t t = 0; t < source.steps; ++t) {
       field->read_step(t, step.data());
-      ASSERT_EQ(0, std::memcmp(step.data(), expected.data() + t * 400, 400)) << "decoders up to " << int(isa) << ", step " << t;
-      for (std::uint64_t v = 0; v < 100; ++v)
-        ASSERT_LE(std::fabs(step[v] - source.values[t * 100 + v]), 1e-2 * source.range() * (1 + 1e-6)) << t << "," << v;
+      ASSERT_EQ(0, std::memcmp(step.data(), expected.data() + t * N * 4, N * 4)) << "decoders up to " << int(isa) << ", step " << t;
+      for (std::uint64_t v = 0; v < N; ++v)
+        ASSERT_LE(std::fabs(step[v] - source.values[t * N + v]), 1e-2 * source.range() * (1 + 1e-6)) << t << "," << v;
     }
   }
+}
+
+// Written by the build of format version 3: white_noise(100, 20, 7) with add_outliers, window
+// 16, codebooks of 16, a 1e-2 range-relative bound (two predictive_lanes pages of 16 and 4 steps,
+// 28 exception rows).
+TEST(LaneBlocks, Version3FilesReadExactlyAsTheirBuildReadThem) {
+  auto source = testing::white_noise(100, 20, 7);
+  testing::add_outliers(source);
+  expect_older_file_reads("lanes_v3", 3, source);
+}
+
+// Written by the build of format version 4 with the same codec: a run's start (transient_field's
+// first six steps, on white_noise(100, 20, 7)) with add_outliers. Page 0 (16 steps) has blocks
+// whose steps 2-5 are wider than the rest, and 26 exception rows; page 1 has 4 steps.
+TEST(LaneBlocks, Version4FilesReadExactlyAsTheirBuildReadThem) {
+  auto source = testing::white_noise(100, 20, 7);
+  const float start[6] = {0, 30, 10, 40, 5, 25};  // then 20
+  for (std::uint64_t v = 0; v < 100; ++v)
+    for (std::uint32_t t = 0; t < 20; ++t) {
+      float& x = source.values[t * 100 + v];
+      x = 0.05f * x + (t < 6 ? start[t] : 20.f) * float(1 + v % 5);
+    }
+  testing::add_outliers(source);
+  expect_older_file_reads("lanes_v4", 4, source);
 }
 
 }  // namespace

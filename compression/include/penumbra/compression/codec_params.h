@@ -61,7 +61,8 @@ enum class PageMethod : std::uint32_t {
   vq_aligned = 3,
   vq_aligned_residual = 4,  ///< vq_aligned plus a quantised residual that holds the error bound
   /// The predictive coder with its integers in blocks of 16 vertices that share their widths
-  /// (format version 3; version 4 adds a width for the steps just after step 1; LaneBlocks):
+  /// (format version 3; version 4 adds a width for the steps just after step 1, version 5 one for
+  /// step 2 and a transient end per block; LaneBlocks):
   /// smaller than per-vertex sections where a run's first steps jump, and a whole window decodes
   /// several times faster.
   predictive_lanes = 5,

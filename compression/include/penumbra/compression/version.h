@@ -11,5 +11,8 @@ namespace penumbra::compression {
 ///      other layouts are unchanged
 ///   4  predictive_lanes blocks hold a fourth width, for the steps just after step 1 (a run's
 ///      transient); version-3 lane pages read with it equal to their later steps' width
-constexpr int kContainerFormatVersion = 4;
+///   5  predictive_lanes blocks hold a width for step 2, one for the transient steps after it and
+///      where those end (per block); version-3 and -4 lane pages read with their transient steps
+///      ending at step 6
+constexpr int kContainerFormatVersion = 5;
 }  // namespace penumbra::compression
