@@ -71,6 +71,9 @@ inline std::uint32_t lane_transient_width(const LaneBlocks& L, std::uint64_t b) 
 inline std::uint32_t lane_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 3]; }
 inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) { return L.widths[kLaneWidths * b + 4]; }
 
+/// A transient end is stored in a byte: a window of more steps ends its transient steps by then.
+constexpr std::uint32_t kLaneMaxTransientEnd = 255;
+
 /// Where an n-step page's transient steps start: step 3, or n if it has fewer steps.
 inline std::uint32_t lane_transient_start(std::uint32_t steps) { return std::min(steps, 3u); }
 

@@ -20,7 +20,8 @@ std::uint32_t signed_width(std::int32_t d) {
 // One chunk's blocks, with its columns starting at bit 0 (placed at their offset when joined).
 struct Chunk {
   std::vector<std::uint8_t> widths;
-  std::vector<std::uint16_t> transient_ends, linear, raw, exception_rows, exception_steps, exception_lanes;
+  std::vector<std::uint8_t> transient_ends;
+  std::vector<std::uint16_t> linear, raw, exception_rows, exception_steps, exception_lanes;
   std::vector<std::uint32_t> highs;  // zigzag high parts, each at its block's width
   std::vector<float> raw_values;
   std::vector<std::uint32_t> words;
@@ -48,10 +49,10 @@ struct Quantiser {
 
 // What an exception row is priced at when a span's width is chosen. It stores 32 bits (step and
 // lanes) and a high part per lane, but each row also breaks the decoder's step loop (a load of
-// its lanes, an expand, a test per step of its span): priced at its 32 stored bits, mug-diffused
-// at 1e-3 kept 655 rows and decoded 1.4-1.6 times slower than with their work skipped; at 128
-// bits, with T chosen per block, 21 rows for 1 % more bits.
-constexpr std::uint64_t kRowPriceBits = 128;
+// its lanes, an expand, a test per step of its span). On mug at 1e-3 and 1e-2, against 32 bits:
+// 64 decodes a window 1-12 % faster at 1.5-1.7 % more bytes; 96 and 128 add 1-5 % speed but
+// cost 3-9 % of the ratio.
+constexpr std::uint64_t kRowPriceBits = 64;
 
 // A block's errors d[l * n + t] counted per step, as sums over steps [0, t), so that the cheapest
 // width of any span of steps costs O(33) whatever its length:
@@ -127,8 +128,8 @@ BlockLayout choose_layout(const SpanCosts& costs, std::uint32_t n, LaneLayout la
     const std::uint32_t later = layout == LaneLayout::transient_to_6 ? costs.cheapest(end, n).width : shared;
     return {n > 2 ? shared : 0, end > 3 ? shared : 0, end < n ? later : 0, end};
   }
-  // Each transient end up to kLaneTransientSearch, and the window's end: two spans' cheapest
-  // widths each; the fewest bits win, the earliest end on a tie.
+  // Each transient end up to kLaneTransientSearch, and the window's end if a byte holds it: two
+  // spans' cheapest widths each; the fewest bits win, the earliest end on a tie.
   BlockLayout best{costs.cheapest(std::min(n, 2u), start).width, 0, 0, start};
   std::uint64_t fewest = ~0ull;
   const auto consider = [&](std::uint32_t end) {
@@ -140,7 +141,7 @@ BlockLayout choose_layout(const SpanCosts& costs, std::uint32_t n, LaneLayout la
   };
   const std::uint32_t last = std::min(n, kLaneTransientSearch);
   for (std::uint32_t end = start; end <= last; ++end) consider(end);
-  if (last < n) consider(n);
+  if (last < n && n <= kLaneMaxTransientEnd) consider(n);
   return best;
 }
 
@@ -221,7 +222,7 @@ void encode_block(const float* x, std::uint64_t lanes, const Quantiser& q, Chunk
   c.exception_rows.push_back(std::uint16_t(c.exception_steps.size() - rows_before));
   c.widths.insert(c.widths.end(), {std::uint8_t(w1), std::uint8_t(layout.w2), std::uint8_t(layout.w3),
                                    std::uint8_t(layout.w), std::uint8_t(high_width)});
-  c.transient_ends.push_back(std::uint16_t(layout.end));
+  c.transient_ends.push_back(std::uint8_t(layout.end));
   c.linear.push_back(linear);
   c.raw.push_back(raw);
   c.bits = pos;

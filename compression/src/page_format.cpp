@@ -53,7 +53,7 @@ void get_lane_layout(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_
   std::vector<std::uint8_t> stored;
   r.get_array(stored, stored_widths * B);
   L.widths.resize(kLaneWidths * B);
-  L.transient_ends.assign(B, std::uint16_t(end));
+  L.transient_ends.assign(B, std::uint8_t(end));
   for (std::uint64_t b = 0; b < B; ++b) {
     const std::uint8_t* s = stored.data() + stored_widths * b;
     const std::uint8_t early = s[1], later = version >= 4 ? s[2] : end < steps ? s[1] : 0;

@@ -40,7 +40,7 @@ struct BitBlocks {
 struct LaneBlocks {
   static constexpr std::uint32_t kLanes = 16;
   std::vector<std::uint8_t> widths;        ///< per block: the widths of step 1, step 2, the transient steps and the later steps, and the exceptions' high-part width
-  std::vector<std::uint16_t> transient_ends;  ///< per block: its first step past the transient steps (3 <= T <= steps when steps >= 3)
+  std::vector<std::uint8_t> transient_ends;  ///< per block: its first step past the transient steps T, min(steps, 3) <= T <= steps
   std::vector<std::uint16_t> linear;       ///< per block: lanes whose predictor extrapolates (bit l: lane l)
   std::vector<std::uint16_t> raw;          ///< per block: lanes stored as exact float32 values instead
   std::vector<std::uint16_t> exception_rows;  ///< per block: steps with an exception
