@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "lane_blocks.h"
 #include "lane_ops.h"
 #include "section_lanes.h"
 #include "vq_value.h"
@@ -124,6 +125,88 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
   }
 }
 
+// GCC 12 warns that the AVX-512 intrinsics' own undefined-vector placeholders may be used
+// uninitialised (a false positive inside immintrin.h).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// The AVX-512 transpose of 16 rows of 8: r[l] holds row l in its low half and row l + 8 in its
+// high half; c[k] gets value k of rows 0..15. transpose8's steps run on both halves at once (the
+// unpacks and shuffles work within 128-bit lanes), and the last one joins lanes of a half with a
+// two-source permute.
+__attribute__((target("avx512f"), always_inline)) inline void transpose16x8(const __m512 r[8], __m512 c[8]) {
+  __m512 t[8], q[8];
+  for (int l = 0; l < 8; l += 2) {
+    t[l] = _mm512_unpacklo_ps(r[l], r[l + 1]);
+    t[l + 1] = _mm512_unpackhi_ps(r[l], r[l + 1]);
+  }
+  for (int h = 0; h < 8; h += 4) {
+    q[h] = _mm512_shuffle_ps(t[h], t[h + 2], _MM_SHUFFLE(1, 0, 1, 0));
+    q[h + 1] = _mm512_shuffle_ps(t[h], t[h + 2], _MM_SHUFFLE(3, 2, 3, 2));
+    q[h + 2] = _mm512_shuffle_ps(t[h + 1], t[h + 3], _MM_SHUFFLE(1, 0, 1, 0));
+    q[h + 3] = _mm512_shuffle_ps(t[h + 1], t[h + 3], _MM_SHUFFLE(3, 2, 3, 2));
+  }
+  // Per 256-bit half, permute2f128's 0x20 (both low 128-bit lanes) and 0x31 (both high ones).
+  const __m512i low = _mm512_setr_epi32(0, 1, 2, 3, 16, 17, 18, 19, 8, 9, 10, 11, 24, 25, 26, 27);
+  const __m512i high = _mm512_setr_epi32(4, 5, 6, 7, 20, 21, 22, 23, 12, 13, 14, 15, 28, 29, 30, 31);
+  for (int k = 0; k < 4; ++k) {
+    c[k] = _mm512_permutex2var_ps(q[k], low, q[k + 4]);
+    c[k + 4] = _mm512_permutex2var_ps(q[k], high, q[k + 4]);
+  }
+}
+
+// vq_window_lanes<false> with the step rows written 16 vertices at a time: each vertex's run of
+// eight D_W values is still one read, rows l and l + 8 of a group share a register, and one
+// transpose, eight adds and eight stores serve 16 vertices where the AVX2 form needs two of each.
+// A run's last 8 vertices, if it has an odd number of eights, take the AVX2 form.
+__attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale, const std::uint16_t* mean_q,
+                                                           const float* c8, const std::uint8_t* i8, const float* cw,
+                                                           std::uint32_t window, const std::uint8_t* iw,
+                                                           std::uint64_t count, float* out, std::uint64_t stride,
+                                                           std::uint32_t steps) {
+  constexpr std::uint64_t kRun = 256;
+  const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
+  const std::uint32_t block = window / 8;
+  alignas(64) float base[8 * kRun];
+  alignas(64) std::int32_t row8[kRun], roww[kRun];
+  for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
+    const std::uint64_t run = std::min(kRun, count - r0);  // a multiple of 8
+    for (std::uint64_t j = 0; j < run; ++j) {
+      row8[j] = std::int32_t(i8[r0 + j]) * 8;
+      roww[j] = std::int32_t(iw[r0 + j]) * std::int32_t(window);
+    }
+    for (std::uint64_t j = 0; j < run; j += kLanes) {
+      __m256 d8[8];
+      rows_transposed(c8, row8 + j, d8);
+      const __m256 mean = means8(l, s, mean_q + r0 + j);
+      for (int k = 0; k < 8; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
+    }
+    for (std::uint32_t t = 0; t < steps; t += 8) {
+      const float* b = base + std::uint64_t(t / block) * kRun;
+      const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
+      float* at = out + std::uint64_t(t) * stride + r0;
+      const float* table = cw + t;
+      std::uint64_t j = 0;
+      for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
+        __m512 r[8], c[8];
+        for (int v = 0; v < 8; ++v)
+          r[v] = _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castps_pd(_mm512_castps256_ps512(_mm256_loadu_ps(table + roww[j + v]))),
+                                                     _mm256_castps_pd(_mm256_loadu_ps(table + roww[j + 8 + v])), 1));
+        transpose16x8(r, c);
+        const __m512 bj = _mm512_load_ps(b + j);
+        for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride + j, _mm512_add_ps(bj, c[k]));
+      }
+      for (; j < run; j += kLanes) {
+        __m256 c[8];
+        rows_transposed(table, roww + j, c);
+        const __m256 bj = _mm256_load_ps(b + j);
+        for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
+      }
+    }
+  }
+}
+
+#pragma GCC diagnostic pop
+
 __attribute__((target("avx2"))) void add_offsets_lanes(const float* table, const std::int32_t* offset,
                                                        const float* level, std::uint64_t count, float* out) {
   for (std::uint64_t i = 0; i < count; i += kLanes) {
@@ -200,7 +283,10 @@ bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* 
     vq_window_lanes<true>(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps, residual);
     return true;
   }
-  vq_window_lanes<false>(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps, nullptr);
+  if (lane_isa() >= LaneIsa::avx512)
+    vq_window_lanes512(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps);
+  else
+    vq_window_lanes<false>(lo, scale, mean_q, c8, i8, cw, window, iw, i, out, stride, steps, nullptr);
   const std::uint32_t block = window / 8;
   for (std::uint64_t v = i; v < count; ++v) {
     const float mean = dequantise_mean(lo, scale, mean_q[v]);
