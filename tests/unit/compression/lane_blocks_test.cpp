@@ -314,6 +314,21 @@ TEST(LaneBlocks, TheTransientStepsTakeAWidthOfTheirOwn) {
   EXPECT_LT(to_6_bytes, detail::serialize_page(shared, 0).size());
 }
 
+// A window longer than a byte can count: each block's transient end stays within the encoder's
+// search (step 64 at most), and the page goes through a file's bytes and decodes on every path.
+TEST(LaneBlocks, WindowsLongerThanAByteCountsKeepTheirTransientEnds) {
+  const auto f = transient_field(70, 300);  // 4 full blocks and one of 6 lanes
+  CodecParams p;
+  p.window = 512;
+  const EncodedPage page = testing::encode(f, 0, 300, p, 1e-3f * f.range());
+  ASSERT_EQ(page.method, PageMethod::predictive_lanes);
+  for (std::uint64_t b = 0; b < page.lanes.block_count(); ++b) {
+    ASSERT_GE(page.lanes.transient_ends[b], 3u) << b;
+    ASSERT_LE(page.lanes.transient_ends[b], 64u) << b;
+  }
+  expect_paths_agree(f, 300, through_page_bytes(page), "300 of 512 steps");
+}
+
 // A field of whole numbers coded exactly (step 1, lo 0) as one window of lane blocks, n steps,
 // 56 vertices: block 0 constant; block 1 ramps of slopes 1-3, which the extrapolating predictor
 // holds exactly; block 2 constant but for jumps that stay (steps 3, 10 and 25: one lane each, the
