@@ -154,10 +154,22 @@ __attribute__((target("avx512f"), always_inline)) inline void transpose16x8(cons
   }
 }
 
-// vq_window_lanes<false> with the step rows written 16 vertices at a time: each vertex's run of
-// eight D_W values is still one read, rows l and l + 8 of a group share a register, and one
+// The eight floats at table + row[l] of 16 rows, transposed: c[k] = table[row[l] + k], l < 16.
+// Rows l and l + 8 share a register (low and high halves).
+__attribute__((target("avx512f"), always_inline)) inline void rows_transposed16(const float* table,
+                                                                                 const std::int32_t* row, __m512 c[8]) {
+  __m512 r[8];
+  for (int v = 0; v < 8; ++v)
+    r[v] = _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castps_pd(_mm512_castps256_ps512(_mm256_loadu_ps(table + row[v]))),
+                                               _mm256_castps_pd(_mm256_loadu_ps(table + row[8 + v])), 1));
+  transpose16x8(r, c);
+}
+
+// vq_window_lanes<false> with 16 vertices at a time: each vertex's D8 row and its runs of eight
+// D_W values are still one read each, rows l and l + 8 of a group share a register, and one
 // transpose, eight adds and eight stores serve 16 vertices where the AVX2 form needs two of each.
-// A run's last 8 vertices, if it has an odd number of eights, take the AVX2 form.
+// Only the D8 blocks the page's steps reach are kept (3 of 8 on a 21-step page of a 64-step
+// window). A run's last 8 vertices, if it has an odd number of eights, take the AVX2 form.
 __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale, const std::uint16_t* mean_q,
                                                            const float* c8, const std::uint8_t* i8, const float* cw,
                                                            std::uint32_t window, const std::uint8_t* iw,
@@ -165,7 +177,8 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
                                                            std::uint32_t steps) {
   constexpr std::uint64_t kRun = 256;
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
-  const std::uint32_t block = window / 8;
+  const __m512 l16 = _mm512_set1_ps(lo), s16 = _mm512_set1_ps(scale);
+  const std::uint32_t block = window / 8, blocks = (steps + block - 1) / block;
   alignas(64) float base[8 * kRun];
   alignas(64) std::int32_t row8[kRun], roww[kRun];
   for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
@@ -174,24 +187,29 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
       row8[j] = std::int32_t(i8[r0 + j]) * 8;
       roww[j] = std::int32_t(iw[r0 + j]) * std::int32_t(window);
     }
-    for (std::uint64_t j = 0; j < run; j += kLanes) {
+    std::uint64_t j = 0;
+    for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
+      __m512 d8[8];
+      rows_transposed16(c8, row8 + j, d8);
+      const __m512i q = _mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(mean_q + r0 + j)));
+      const __m512 mean = _mm512_add_ps(l16, _mm512_mul_ps(_mm512_cvtepi32_ps(q), s16));
+      for (std::uint32_t k = 0; k < blocks; ++k) _mm512_store_ps(base + std::uint64_t(k) * kRun + j, _mm512_add_ps(mean, d8[k]));
+    }
+    for (; j < run; j += kLanes) {
       __m256 d8[8];
       rows_transposed(c8, row8 + j, d8);
       const __m256 mean = means8(l, s, mean_q + r0 + j);
-      for (int k = 0; k < 8; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
+      for (std::uint32_t k = 0; k < blocks; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
     }
     for (std::uint32_t t = 0; t < steps; t += 8) {
       const float* b = base + std::uint64_t(t / block) * kRun;
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
       const float* table = cw + t;
-      std::uint64_t j = 0;
+      j = 0;
       for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
-        __m512 r[8], c[8];
-        for (int v = 0; v < 8; ++v)
-          r[v] = _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castps_pd(_mm512_castps256_ps512(_mm256_loadu_ps(table + roww[j + v]))),
-                                                     _mm256_castps_pd(_mm256_loadu_ps(table + roww[j + 8 + v])), 1));
-        transpose16x8(r, c);
+        __m512 c[8];
+        rows_transposed16(table, roww + j, c);
         const __m512 bj = _mm512_load_ps(b + j);
         for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride + j, _mm512_add_ps(bj, c[k]));
       }
