@@ -82,7 +82,7 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
   // one page per step row for every 32 bytes written (a third slower on 100K vertices).
   constexpr std::uint64_t kRun = 256;
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
-  const std::uint32_t block = window / 8;
+  const std::uint32_t block = window / 8, blocks = (steps + block - 1) / block;  // the D8 blocks the steps reach
   alignas(32) float base[8 * kRun];
   alignas(32) std::int32_t row8[kRun], roww[kRun];
   for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
@@ -95,7 +95,7 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
       __m256 d8[8];
       rows_transposed(c8, row8 + j, d8);
       const __m256 mean = means8(l, s, mean_q + r0 + j);
-      for (int k = 0; k < 8; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
+      for (std::uint32_t k = 0; k < blocks; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
     }
     for (std::uint32_t t = 0; t < steps; t += 8) {
       const float* b = base + std::uint64_t(t / block) * kRun;
