@@ -70,6 +70,41 @@ __attribute__((target("avx2"))) void add_rows8_lanes(const float* table, const s
   }
 }
 
+// mean + D8 of 8 vertices (mean_q and row8 at the first) for each D8 block k < blocks, into
+// base[k * run_capacity].
+PNB_LANES void means_plus_d8(__m256 lo, __m256 scale, const std::uint16_t* mean_q, const float* c8,
+                             const std::int32_t* row8, std::uint32_t blocks, float* base, std::uint64_t run_capacity) {
+  __m256 d8[8];
+  rows_transposed(c8, row8, d8);
+  const __m256 mean = means8(lo, scale, mean_q);
+  for (std::uint32_t k = 0; k < blocks; ++k) _mm256_store_ps(base + std::uint64_t(k) * run_capacity, _mm256_add_ps(mean, d8[k]));
+}
+
+// Steps t .. t + k_end - 1 of 8 vertices: base b plus their D_W values (table at step t, rows
+// row), plus the residual of lanes `lane` .. lane + 7 where they have one; written at `at`, a step
+// `stride` apart. Lanes without a residual keep the VQ value as it is (code 0 keeps -0.0f, as in
+// the scalar decoders); vertices without one (most, on sparse residuals) store it directly.
+template <bool kWithResidual>
+PNB_LANES void steps8(const float* table, const std::int32_t* row, const float* b, float* at, std::uint64_t stride,
+                      std::uint32_t t, std::uint32_t k_end, const ResidualLanes* residual, std::uint64_t lane) {
+  __m256 c[8];
+  rows_transposed(table, row, c);
+  const __m256 bj = _mm256_load_ps(b);
+  const __m256 adds = kWithResidual ? _mm256_castsi256_ps(load(residual->adds + lane)) : _mm256_setzero_ps();
+  const int adding = kWithResidual ? _mm256_movemask_ps(adds) : 0;
+  if (adding) {
+    const __m256 step = _mm256_set1_ps(residual->step);
+    const std::uint32_t* z = residual->z + std::uint64_t(t) * kResidualStride + lane;
+    for (std::uint32_t k = 0; k < k_end; ++k, z += kResidualStride) {
+      const __m256 value = _mm256_add_ps(bj, c[k]);
+      const __m256 sum = add_scaled(value, unzigzag_lanes(load(z)), step);
+      store(at + std::uint64_t(k) * stride, adding == 0xFF ? sum : _mm256_blendv_ps(value, sum, adds));
+    }
+  } else {
+    for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride, _mm256_add_ps(bj, c[k]));
+  }
+}
+
 template <bool kWithResidual>
 __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, const std::uint16_t* mean_q,
                                                      const float* c8, const std::uint8_t* i8, const float* cw,
@@ -91,36 +126,14 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
       row8[j] = std::int32_t(i8[r0 + j]) * 8;
       roww[j] = std::int32_t(iw[r0 + j]) * std::int32_t(window);
     }
-    for (std::uint64_t j = 0; j < run; j += kLanes) {
-      __m256 d8[8];
-      rows_transposed(c8, row8 + j, d8);
-      const __m256 mean = means8(l, s, mean_q + r0 + j);
-      for (std::uint32_t k = 0; k < blocks; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
-    }
+    for (std::uint64_t j = 0; j < run; j += kLanes)
+      means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
     for (std::uint32_t t = 0; t < steps; t += 8) {
       const float* b = base + std::uint64_t(t / block) * kRun;
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
-      for (std::uint64_t j = 0; j < run; j += kLanes) {
-        __m256 c[8];
-        rows_transposed(cw + t, roww + j, c);
-        const __m256 bj = _mm256_load_ps(b + j);
-        // Lanes without a residual keep the VQ value as it is (code 0 keeps -0.0f, as in the
-        // scalar decoders); blocks without one (most, on sparse residuals) store it directly.
-        const __m256 adds = kWithResidual ? _mm256_castsi256_ps(load(residual->adds + r0 + j)) : _mm256_setzero_ps();
-        const int adding = kWithResidual ? _mm256_movemask_ps(adds) : 0;
-        if (adding) {
-          const __m256 step = _mm256_set1_ps(residual->step);
-          const std::uint32_t* z = residual->z + std::uint64_t(t) * kResidualStride + r0 + j;
-          for (std::uint32_t k = 0; k < k_end; ++k, z += kResidualStride) {
-            const __m256 value = _mm256_add_ps(bj, c[k]);
-            const __m256 sum = add_scaled(value, unzigzag_lanes(load(z)), step);
-            store(at + std::uint64_t(k) * stride + j, adding == 0xFF ? sum : _mm256_blendv_ps(value, sum, adds));
-          }
-        } else {
-          for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
-        }
-      }
+      for (std::uint64_t j = 0; j < run; j += kLanes)
+        steps8<kWithResidual>(cw + t, roww + j, b + j, at + j, stride, t, k_end, residual, r0 + j);
     }
   }
 }
@@ -165,6 +178,16 @@ __attribute__((target("avx512f"), always_inline)) inline void rows_transposed16(
   transpose16x8(r, c);
 }
 
+// The 16-vertex form of steps8 without a residual (rows l and l + 8 share a register).
+__attribute__((target("avx512f"), always_inline)) inline void steps16(const float* table, const std::int32_t* row,
+                                                                      const float* b, float* at, std::uint64_t stride,
+                                                                      std::uint32_t k_end) {
+  __m512 c[8];
+  rows_transposed16(table, row, c);
+  const __m512 bj = _mm512_load_ps(b);
+  for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride, _mm512_add_ps(bj, c[k]));
+}
+
 // vq_window_lanes<false> with 16 vertices at a time: each vertex's D8 row and its runs of eight
 // D_W values are still one read each, rows l and l + 8 of a group share a register, and one
 // transpose, eight adds and eight stores serve 16 vertices where the AVX2 form needs two of each.
@@ -195,30 +218,13 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
       const __m512 mean = _mm512_add_ps(l16, _mm512_mul_ps(_mm512_cvtepi32_ps(q), s16));
       for (std::uint32_t k = 0; k < blocks; ++k) _mm512_store_ps(base + std::uint64_t(k) * kRun + j, _mm512_add_ps(mean, d8[k]));
     }
-    for (; j < run; j += kLanes) {
-      __m256 d8[8];
-      rows_transposed(c8, row8 + j, d8);
-      const __m256 mean = means8(l, s, mean_q + r0 + j);
-      for (std::uint32_t k = 0; k < blocks; ++k) _mm256_store_ps(base + std::uint64_t(k) * kRun + j, _mm256_add_ps(mean, d8[k]));
-    }
+    for (; j < run; j += kLanes) means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
     for (std::uint32_t t = 0; t < steps; t += 8) {
       const float* b = base + std::uint64_t(t / block) * kRun;
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
-      const float* table = cw + t;
-      j = 0;
-      for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
-        __m512 c[8];
-        rows_transposed16(table, roww + j, c);
-        const __m512 bj = _mm512_load_ps(b + j);
-        for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride + j, _mm512_add_ps(bj, c[k]));
-      }
-      for (; j < run; j += kLanes) {
-        __m256 c[8];
-        rows_transposed(table, roww + j, c);
-        const __m256 bj = _mm256_load_ps(b + j);
-        for (std::uint32_t k = 0; k < k_end; ++k) store(at + std::uint64_t(k) * stride + j, _mm256_add_ps(bj, c[k]));
-      }
+      for (j = 0; j + 2 * kLanes <= run; j += 2 * kLanes) steps16(cw + t, roww + j, b + j, at + j, stride, k_end);
+      for (; j < run; j += kLanes) steps8<false>(cw + t, roww + j, b + j, at + j, stride, t, k_end, nullptr, r0 + j);
     }
   }
 }
