@@ -74,6 +74,10 @@ inline std::uint32_t lane_exception_width(const LaneBlocks& L, std::uint64_t b) 
 /// A transient end is stored in a byte: a window of more steps ends its transient steps by then.
 constexpr std::uint32_t kLaneMaxTransientEnd = 255;
 
+/// Where format versions 3 and 4 ended every block's transient steps (or the window's end, if
+/// sooner): version 4 gave steps 2 .. 5 one width.
+constexpr std::uint32_t kOlderLaneTransientEnd = 6;
+
 /// Where an n-step page's transient steps start: step 3, or n if it has fewer steps.
 inline std::uint32_t lane_transient_start(std::uint32_t steps) { return std::min(steps, 3u); }
 

@@ -123,7 +123,7 @@ BlockLayout choose_layout(const SpanCosts& costs, std::uint32_t n, LaneLayout la
   const std::uint32_t start = lane_transient_start(n);
   if (layout != LaneLayout::chosen) {
     // Format version 4's transient steps 2 .. 5 (version 3: every step) share one width.
-    const std::uint32_t end = std::min(n, 6u), shared_end = layout == LaneLayout::transient_to_6 ? end : n;
+    const std::uint32_t end = std::min(n, kOlderLaneTransientEnd), shared_end = layout == LaneLayout::transient_to_6 ? end : n;
     const std::uint32_t shared = costs.cheapest(std::min(n, 2u), shared_end).width;
     const std::uint32_t later = layout == LaneLayout::transient_to_6 ? costs.cheapest(end, n).width : shared;
     return {n > 2 ? shared : 0, end > 3 ? shared : 0, end < n ? later : 0, end};

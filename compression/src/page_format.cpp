@@ -39,8 +39,7 @@ void get_quantiser(ByteReader& r, EncodedPage& p) {
 // Format versions 3 and 4 stored fewer widths a block and no transient end: version 4 four
 // (step 1's, steps 2-5's, the later steps', the high parts'), version 3 three (step 1's, every
 // later step's, the high parts'). Their blocks read into this layout with their transient steps
-// ending at step 6, or the window's end.
-constexpr std::uint32_t kOlderTransientEnd = 6;
+// ending at kOlderLaneTransientEnd, or the window's end.
 std::uint64_t older_lane_widths(std::uint32_t version) { return version >= 4 ? 4 : 3; }
 
 void get_lane_layout(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_t steps, std::uint32_t version) {
@@ -49,7 +48,7 @@ void get_lane_layout(ByteReader& r, LaneBlocks& L, std::uint64_t B, std::uint32_
     return r.get_array(L.transient_ends, B);
   }
   const std::uint64_t stored_widths = older_lane_widths(version);
-  const std::uint32_t end = std::min(steps, kOlderTransientEnd);
+  const std::uint32_t end = std::min(steps, kOlderLaneTransientEnd);
   std::vector<std::uint8_t> stored;
   r.get_array(stored, stored_widths * B);
   L.widths.resize(kLaneWidths * B);
@@ -69,7 +68,7 @@ void put_lane_layout(ByteWriter& w, const EncodedPage& p, std::uint32_t version)
     return w.put_array(L.transient_ends);
   }
   const std::uint64_t stored_widths = older_lane_widths(version);
-  const std::uint32_t n = p.step_count, end = std::min(n, kOlderTransientEnd);
+  const std::uint32_t n = p.step_count, end = std::min(n, kOlderLaneTransientEnd);
   std::vector<std::uint8_t> stored(stored_widths * L.block_count());
   for (std::uint64_t b = 0; b < L.block_count(); ++b) {
     const std::uint32_t w2 = lane_width_2(L, b), w3 = lane_transient_width(L, b), later = lane_width(L, b);

@@ -70,6 +70,15 @@ __attribute__((target("avx2"))) void add_rows8_lanes(const float* table, const s
   }
 }
 
+// Where each vertex of a run's rows start: row8[j] in the D8 codebook, roww[j] in the D_W one.
+inline void run_rows(const std::uint8_t* i8, const std::uint8_t* iw, std::uint32_t window, std::uint64_t run,
+                     std::int32_t* row8, std::int32_t* roww) {
+  for (std::uint64_t j = 0; j < run; ++j) {
+    row8[j] = std::int32_t(i8[j]) * 8;
+    roww[j] = std::int32_t(iw[j]) * std::int32_t(window);
+  }
+}
+
 // mean + D8 of 8 vertices (mean_q and row8 at the first) for each D8 block k < blocks, into
 // base[k * run_capacity].
 PNB_LANES void means_plus_d8(__m256 lo, __m256 scale, const std::uint16_t* mean_q, const float* c8,
@@ -122,10 +131,7 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
   alignas(32) std::int32_t row8[kRun], roww[kRun];
   for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
     const std::uint64_t run = std::min(kRun, count - r0);  // a multiple of 8
-    for (std::uint64_t j = 0; j < run; ++j) {
-      row8[j] = std::int32_t(i8[r0 + j]) * 8;
-      roww[j] = std::int32_t(iw[r0 + j]) * std::int32_t(window);
-    }
+    run_rows(i8 + r0, iw + r0, window, run, row8, roww);
     for (std::uint64_t j = 0; j < run; j += kLanes)
       means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
     for (std::uint32_t t = 0; t < steps; t += 8) {
@@ -206,10 +212,7 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
   alignas(64) std::int32_t row8[kRun], roww[kRun];
   for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
     const std::uint64_t run = std::min(kRun, count - r0);  // a multiple of 8
-    for (std::uint64_t j = 0; j < run; ++j) {
-      row8[j] = std::int32_t(i8[r0 + j]) * 8;
-      roww[j] = std::int32_t(iw[r0 + j]) * std::int32_t(window);
-    }
+    run_rows(i8 + r0, iw + r0, window, run, row8, roww);
     std::uint64_t j = 0;
     for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
       __m512 d8[8];

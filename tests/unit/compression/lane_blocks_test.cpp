@@ -246,18 +246,21 @@ TEST(LaneBlocks, FilesRoundTripAndOlderVersionsCannotHoldThem) {
   }
 }
 
-// A window whose first steps jump further than the rest, as a run's start does: the transient
-// steps get a width of their own.
-SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
-  SyntheticField f = testing::white_noise(n, steps, 11);
+// f scaled down and put on a run's start: its first six steps jump further than the rest, so the
+// transient steps get a width of their own.
+SyntheticField with_run_start(SyntheticField f) {
   constexpr std::uint32_t kStart = 6;
   const float start[kStart] = {0, 30, 10, 40, 5, 25};  // then 20
+  const std::uint64_t n = f.vertices;
   for (std::uint64_t v = 0; v < n; ++v)
-    for (std::uint32_t t = 0; t < steps; ++t) {
+    for (std::uint32_t t = 0; t < f.steps; ++t) {
       float& x = f.values[std::uint64_t(t) * n + v];
       x = 0.05f * x + (t < kStart ? start[t] : 20.f) * float(1 + v % 5);
     }
   return f;
+}
+SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
+  return with_run_start(testing::white_noise(n, steps, 11));
 }
 
 // Codes `f`'s first page.step_count steps as page's lane blocks, with its quantiser, in `layout`,
@@ -450,17 +453,11 @@ TEST(LaneBlocks, Version3FilesReadExactlyAsTheirBuildReadThem) {
   expect_older_file_reads("lanes_v3", 3, source);
 }
 
-// Written by the build of format version 4 with the same codec: a run's start (transient_field's
-// first six steps, on white_noise(100, 20, 7)) with add_outliers. Page 0 (16 steps) has blocks
+// Written by the build of format version 4 with the same codec: with_run_start(white_noise(100,
+// 20, 7)) with add_outliers. Page 0 (16 steps) has blocks
 // whose steps 2-5 are wider than the rest, and 26 exception rows; page 1 has 4 steps.
 TEST(LaneBlocks, Version4FilesReadExactlyAsTheirBuildReadThem) {
-  auto source = testing::white_noise(100, 20, 7);
-  const float start[6] = {0, 30, 10, 40, 5, 25};  // then 20
-  for (std::uint64_t v = 0; v < 100; ++v)
-    for (std::uint32_t t = 0; t < 20; ++t) {
-      float& x = source.values[t * 100 + v];
-      x = 0.05f * x + (t < 6 ? start[t] : 20.f) * float(1 + v % 5);
-    }
+  auto source = with_run_start(testing::white_noise(100, 20, 7));
   testing::add_outliers(source);
   expect_older_file_reads("lanes_v4", 4, source);
 }
