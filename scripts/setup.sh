@@ -4,6 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential gfortran cmake pkg-config ninja-build
+  clang  # scripts/clang_check.sh
   libvtk9-dev python3-vtk9 xvfb xauth
   libopenmesh-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri mesa-utils

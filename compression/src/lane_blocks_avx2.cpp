@@ -8,14 +8,13 @@
 #include <type_traits>
 
 #include "lane_blocks.h"
+#include "target_region.h"
 
 namespace penumbra::compression::detail {
 
 namespace {
 
-// A target region rather than an attribute, so that the lambdas inside are compiled for it too.
-#pragma GCC push_options
-#pragma GCC target("avx2")
+PNB_TARGET_REGION_BEGIN("avx2")
 
 constexpr std::uint64_t kHalf = kLaneBlock / 2;
 
@@ -179,7 +178,7 @@ void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, Lane
   }
 }
 
-#pragma GCC pop_options
+PNB_TARGET_REGION_END
 
 }  // namespace
 

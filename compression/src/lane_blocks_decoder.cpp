@@ -10,6 +10,7 @@
 
 #include "lane_blocks.h"
 #include "section_lanes.h"
+#include "target_region.h"
 
 namespace penumbra::compression::detail {
 
@@ -98,9 +99,10 @@ std::atomic<int> g_lane_isa_cap{int(LaneIsa::avx512_vbmi2)};
 // GCC 12 warns that the AVX-512 intrinsics' own undefined-vector placeholders may be used
 // uninitialised (a false positive inside immintrin.h).
 #pragma GCC diagnostic push
+#if !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC push_options
-#pragma GCC target("avx512f")
+#endif
+PNB_TARGET_REGION_BEGIN("avx512f")
 // The 32 bits of every lane's column that end at bit `end`: from the row `end` lies in and the row
 // below it (the page's zero row below row 0). A slot of width w that ends there is their top w
 // bits, so one arithmetic shift both extracts it and extends its sign: no mask. Two shifts and
@@ -178,15 +180,13 @@ struct BlockRows {
   }
 };
 
-#pragma GCC pop_options
+PNB_TARGET_REGION_END
 
 // The templates below are defined where VBMI2 is allowed, so that their FunnelShift instances may
-// use it: GCC compiles a template for the target of its definition. Their TwoShifts instances,
+// use it: a template is compiled for the target of its definition. Their TwoShifts instances,
 // which CPUs without VBMI2 run, use no VBMI2 instruction (the ctest
-// LaneBlocks.NoVbmi2WhereItMayBeMissing checks the object code). A target region rather than an
-// attribute, so that the lambdas inside are compiled for it too.
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512vbmi2")
+// LaneBlocks.NoVbmi2WhereItMayBeMissing checks the object code).
+PNB_TARGET_REGION_BEGIN("avx512f,avx512vbmi2")
 // The same 32 bits by one funnel shift, on CPUs with AVX-512 VBMI2 (4-7 % faster on mug).
 struct FunnelShift {
   // `shift`: end % 32 in every lane (the funnel shift reads only a count's low 5 bits).
@@ -355,7 +355,7 @@ void avx512_blocks(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
   if (std::max(b, full_end) < e)
     avx512_window<Bits, false>(p, std::max(b, full_end), e, window + std::max(b, full_end) * kLaneBlock, N);
 }
-#pragma GCC pop_options
+PNB_TARGET_REGION_END
 #pragma GCC diagnostic pop
 
 }  // namespace

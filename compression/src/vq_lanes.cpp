@@ -147,7 +147,9 @@ __attribute__((target("avx2"))) void vq_window_lanes(float lo, float scale, cons
 // GCC 12 warns that the AVX-512 intrinsics' own undefined-vector placeholders may be used
 // uninitialised (a false positive inside immintrin.h).
 #pragma GCC diagnostic push
+#if !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 // The AVX-512 transpose of 16 rows of 8: r[l] holds row l in its low half and row l + 8 in its
 // high half; c[k] gets value k of rows 0..15. transpose8's steps run on both halves at once (the
 // unpacks and shuffles work within 128-bit lanes), and the last one joins lanes of a half with a

@@ -25,7 +25,8 @@ struct AlignedAllocator {
     if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
     return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(Align)));
   }
-  void deallocate(T* p, std::size_t n) noexcept { ::operator delete(p, n * sizeof(T), std::align_val_t(Align)); }
+  // The unsized form: clang before 19 declares the sized one only with -fsized-deallocation.
+  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t(Align)); }
 
   template <class U>
   bool operator==(const AlignedAllocator<U, Align>&) const noexcept {

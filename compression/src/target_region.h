@@ -1,0 +1,21 @@
+// compression/src/target_region.h -- a region of functions compiled for instruction sets beyond
+// the build's baseline (private), with GCC and with clang:
+//
+//   PNB_TARGET_REGION_BEGIN("avx512f,avx512vbmi2")
+//   ... functions, templates and the lambdas inside them ...
+//   PNB_TARGET_REGION_END
+//
+// A region rather than a target attribute on each function, so that the lambdas inside are
+// compiled for it too. GCC's target pragma does that; clang ignores it and has an attribute pragma
+// of its own, which reaches lambdas' call operators as well. Callers choose the region's code at
+// run time (__builtin_cpu_supports).
+#pragma once
+
+#define PNB_PRAGMA(text) _Pragma(#text)
+#if defined(__clang__)
+#define PNB_TARGET_REGION_BEGIN(isa) PNB_PRAGMA(clang attribute push(__attribute__((target(isa))), apply_to = function))
+#define PNB_TARGET_REGION_END PNB_PRAGMA(clang attribute pop)
+#else
+#define PNB_TARGET_REGION_BEGIN(isa) PNB_PRAGMA(GCC push_options) PNB_PRAGMA(GCC target(isa))
+#define PNB_TARGET_REGION_END PNB_PRAGMA(GCC pop_options)
+#endif
