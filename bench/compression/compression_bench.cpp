@@ -130,19 +130,8 @@ Row run_penumbra(const Field& f, const std::string& scratch, pc::CodecParams par
                  const std::string& param) {
   const double raw_mb = double(f.values.size()) * 4 / 1e6;
   const std::string path = scratch + "/" + f.name + "-" + codec + ".pnbf";
-  pc::StreamingOptions o;
-  o.path = path;
-  o.field_name = f.name;
-  o.vertex_count = f.vertices;
-  o.codec = params;
   const auto t0 = Clock::now();
-  pc::StreamingStats st;
-  {
-    pc::StreamingEncoder enc(o);
-    for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
-    enc.finish();
-    st = enc.stats();
-  }
+  const pc::StreamingStats st = write_field_file(f, path, params);
   const double encode_s = seconds(t0);
   const auto field = pc::CompressedField::open(path);
 
@@ -341,13 +330,7 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    Field f;
-    if (kind.rfind("raw:", 0) == 0) {
-      const auto colon = kind.find(':', 4);
-      f = load_raw_field(kind.substr(4, colon - 4), kind.substr(colon + 1));
-    } else {
-      f = synthetic_field(kind, vertices, steps);
-    }
+    const Field f = field_from_spec(kind, vertices, steps);
     std::filesystem::create_directories(scratch);
     g_memcpy_gbps = memcpy_gbps(f);
     std::cerr << "compression/" << f.name << ": " << f.vertices << " vertices x " << f.steps << " steps, range "

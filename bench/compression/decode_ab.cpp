@@ -31,7 +31,7 @@
 
 #include "fields.h"
 #include "penumbra/compression/field_file.h"
-#include "penumbra/compression/streaming_encoder.h"
+#include "penumbra/compression/codec_params.h"
 #include "penumbra/compression/window_codec.h"
 
 using namespace pnb_bench;
@@ -129,25 +129,12 @@ int main(int argc, char** argv) {
     }
   }
 
-  Field f;
   try {
-    if (field_spec.rfind("raw:", 0) == 0) {
-      const std::size_t colon = field_spec.find(':', 4);
-      f = load_raw_field(field_spec.substr(4, colon - 4), colon == std::string::npos ? "raw" : field_spec.substr(colon + 1));
-    } else {
-      f = synthetic_field(field_spec, vertices, steps);
-    }
+    const Field f = field_from_spec(field_spec, vertices, steps);
     const std::string path = "/tmp/pnb_decode_ab_" + std::to_string(getpid()) + ".pnbf";
-    pc::StreamingOptions o;
-    o.path = path;
-    o.field_name = f.name;
-    o.vertex_count = f.vertices;
-    if (bound > 0) o.codec.bound = {pc::BoundKind::range_relative, bound};
-    {
-      pc::StreamingEncoder enc(o);
-      for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
-      enc.finish();
-    }
+    pc::CodecParams codec;
+    if (bound > 0) codec.bound = {pc::BoundKind::range_relative, bound};
+    write_field_file(f, path, codec);
     const auto field = pc::CompressedField::open(path);
     std::vector<pc::EncodedPage> pages;
     for (std::size_t p = 0; p < field->page_count(); ++p) pages.push_back(*field->load_page(p));

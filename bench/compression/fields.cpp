@@ -144,4 +144,23 @@ Field load_raw_field(const std::string& path, const std::string& name) {
   return f;
 }
 
+Field field_from_spec(const std::string& spec, std::uint64_t vertices, std::uint32_t steps) {
+  if (spec.rfind("raw:", 0) != 0) return synthetic_field(spec, vertices, steps);
+  const auto colon = spec.find(':', 4);
+  return load_raw_field(spec.substr(4, colon - 4), spec.substr(colon + 1));
+}
+
+penumbra::compression::StreamingStats write_field_file(const Field& f, const std::string& path,
+                                                       const penumbra::compression::CodecParams& codec) {
+  penumbra::compression::StreamingOptions o;
+  o.path = path;
+  o.field_name = f.name;
+  o.vertex_count = f.vertices;
+  o.codec = codec;
+  penumbra::compression::StreamingEncoder enc(o);
+  for (std::uint32_t t = 0; t < f.steps; ++t) enc.push(f.times[t], f.values.data() + std::uint64_t(t) * f.vertices);
+  enc.finish();
+  return enc.stats();
+}
+
 }  // namespace pnb_bench

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/compression/streaming_encoder.h"
 #include "penumbra/core/aligned_allocator.h"
 
 namespace pnb_bench {
@@ -37,5 +38,13 @@ Field synthetic_field(const std::string& kind, std::uint64_t vertices, std::uint
 
 /// A field exported by export_mug.py (uint64 vertices, uint64 steps, f64 times, f32 values).
 Field load_raw_field(const std::string& path, const std::string& name);
+
+/// The field a `--field` option names: a synthetic kind (with `vertices` and `steps`), or
+/// raw:PATH:NAME for load_raw_field.
+Field field_from_spec(const std::string& spec, std::uint64_t vertices, std::uint32_t steps);
+
+/// Streams every step of f through a StreamingEncoder into the field file `path`; its stats.
+penumbra::compression::StreamingStats write_field_file(const Field& f, const std::string& path,
+                                                       const penumbra::compression::CodecParams& codec);
 
 }  // namespace pnb_bench

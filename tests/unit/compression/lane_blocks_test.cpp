@@ -454,8 +454,8 @@ TEST(LaneBlocks, Version3FilesReadExactlyAsTheirBuildReadThem) {
 }
 
 // Written by the build of format version 4 with the same codec: with_run_start(white_noise(100,
-// 20, 7)) with add_outliers. Page 0 (16 steps) has blocks
-// whose steps 2-5 are wider than the rest, and 26 exception rows; page 1 has 4 steps.
+// 20, 7)) with add_outliers. Page 0 (16 steps) has blocks whose steps 2-5 are wider than the
+// rest, and 26 exception rows; page 1 has 4 steps.
 TEST(LaneBlocks, Version4FilesReadExactlyAsTheirBuildReadThem) {
   auto source = with_run_start(testing::white_noise(100, 20, 7));
   testing::add_outliers(source);
