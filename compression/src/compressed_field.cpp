@@ -217,12 +217,19 @@ std::size_t CompressedField::page_of_step(std::uint64_t step) const {
 }
 
 std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index) const {
+  PageBuffers buffers;
+  return load_page(index, buffers);
+}
+
+std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index, PageBuffers& buffers) const {
   require(index < m_pages.size(), "CompressedField::load_page: page " + std::to_string(index) +
                                       " is outside the file's " + std::to_string(m_pages.size()) + " pages");
   const PageEntry& e = m_pages[index];
   const std::string name = "compressed field '" + m_path + "': " + page_name(index);
-  std::vector<std::uint8_t> bytes(e.bytes);
-  read_at(m_fd, m_path, e.offset, bytes.data(), bytes.size(), page_name(index));
+  // Grown, never shrunk: the next page of the field is about as large.
+  std::vector<std::uint8_t>& bytes = buffers.bytes;
+  if (bytes.size() < e.bytes) bytes.resize(e.bytes);
+  read_at(m_fd, m_path, e.offset, bytes.data(), e.bytes, page_name(index));
   detail::PageHeader h;
   if (!detail::parse_page_header(bytes.data(), h)) throw Error(ErrorCode::io_error, name + ": header is corrupt");
   if (h.page_index != index || h.first_step != e.first_step || h.step_count != e.step_count ||
@@ -231,8 +238,17 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index)
   const std::uint8_t* payload = bytes.data() + detail::PageHeader::kBytes;
   if (detail::crc32(payload, h.payload_bytes) != h.payload_crc)
     throw Error(ErrorCode::io_error, name + ": checksum mismatch (the page is corrupt)");
-  return std::make_shared<const EncodedPage>(detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window,
-                                                                        m_info.codebook_size, name, m_version));
+  std::shared_ptr<EncodedPage> page = std::move(buffers.spare);
+  buffers.spare.reset();
+  if (!page || page.use_count() != 1) page = std::make_shared<EncodedPage>();
+  try {
+    detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window, m_info.codebook_size, name, m_version,
+                               *page);
+  } catch (...) {
+    buffers.spare = std::move(page);  // its memory still serves the next load
+    throw;
+  }
+  return page;
 }
 
 std::uint32_t CompressedField::max_method() const { return detail::max_method_of_version(m_version); }

@@ -245,12 +245,30 @@ bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
   return true;
 }
 
+void reset_keeping_memory(EncodedPage& page) {
+  EncodedPage fresh;
+  for_each_array(
+      [](auto& to, auto& from) {
+        from.clear();
+        to.swap(from);
+      },
+      fresh, page);
+  page = std::move(fresh);
+}
+
 EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
                                std::uint32_t K, const std::string& name, std::uint32_t format_version) {
+  EncodedPage p;
+  parse_page_payload(h, payload, N, W, K, name, format_version, p);
+  return p;
+}
+
+void parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
+                        std::uint32_t K, const std::string& name, std::uint32_t format_version, EncodedPage& p) {
+  reset_keeping_memory(p);
   ByteReader r(payload, h.payload_bytes, name);
   if (h.method > max_method_of_version(format_version)) r.fail("unknown method " + std::to_string(h.method));
   if (h.step_count < 1 || h.step_count > W) r.fail("step count " + std::to_string(h.step_count) + " outside 1..window");
-  EncodedPage p;
   p.method = PageMethod(h.method);
   p.first_step = h.first_step;
   p.step_count = h.step_count;
@@ -302,7 +320,6 @@ EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload,
   const std::string error = p.method == PageMethod::predictive_lanes ? lane_blocks_error(p, &p.lanes)
                                                                      : page_contents_error(p, &p.blocks.section_bits);
   if (!error.empty()) r.fail(error);
-  return p;
 }
 
 }  // namespace penumbra::compression::detail

@@ -64,6 +64,7 @@ void Pager::evict_locked(std::size_t keep_a, std::size_t keep_b) {
       ++it;
     } else {
       m_stats.resident_bytes -= it->second->resident_bytes();
+      if (it->second.use_count() == 1) m_spare = std::move(it->second);
       it = m_resident.erase(it);
     }
   }
@@ -78,7 +79,10 @@ void Pager::request_prefetch_locked(std::size_t page) {
     std::uint64_t held = 0;
     for (const auto& [index, data] : m_resident)
       if (index == m_current) held += data->resident_bytes();
-    if (held + loaded_bytes(*m_field, m_field->page(page)) + 4096 > m_options.memory_cap_bytes) return;
+    if (held + loaded_bytes(*m_field, m_field->page(page)) + 4096 > m_options.memory_cap_bytes) {
+      m_spare.reset();  // no load will take it: its memory counts against the cap no longer
+      return;
+    }
   }
   m_request = page;
   m_wake.notify_all();
@@ -93,10 +97,14 @@ void Pager::prefetch_loop() {
     m_request = kNone;
     if (m_resident.count(page)) continue;
     m_loading = page;
+    // The spare was made by load_page, not const; only this pager held it.
+    m_prefetch_buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(m_spare));
+    m_spare.reset();
+    const EncodedPage* spare = m_prefetch_buffers.spare.get();
     lock.unlock();
     std::shared_ptr<const EncodedPage> data;
     try {
-      data = m_field->load_page(page);
+      data = m_field->load_page(page, m_prefetch_buffers);
     } catch (const Error&) {
       // A bad page is reported by the read that needs it (loaded again there).
     }
@@ -105,6 +113,7 @@ void Pager::prefetch_loop() {
     if (data) {
       ++m_stats.loads;
       ++m_stats.prefetched;
+      m_stats.recycled += spare != nullptr && data.get() == spare;
       // Keep it only if playback still wants it (current or the one after).
       if (page == m_current || page == m_current + 1 || (m_current == kNone && page == m_start))
         insert_locked(page, std::move(data));
@@ -123,10 +132,15 @@ std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator Pager::make_
     if (it != m_resident.end()) return it;
   }
   if (m_request == page) m_request = kNone;  // loaded here: the prefetcher must not load it again
+  PageBuffers buffers;
+  buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(m_spare));
+  m_spare.reset();
+  const EncodedPage* spare = buffers.spare.get();
   lock.unlock();
-  auto loaded = m_field->load_page(page);  // throws naming the page if it is bad
+  auto loaded = m_field->load_page(page, buffers);  // throws naming the page if it is bad
   lock.lock();
   ++m_stats.loads;
+  m_stats.recycled += spare != nullptr && loaded.get() == spare;
   m_current = page;
   evict_locked(page, page + 1);
   insert_locked(page, std::move(loaded));
@@ -163,6 +177,7 @@ void Pager::prepare(std::uint64_t step) {
   const std::size_t page = m_field->page_of_step(step);
   const auto start = std::chrono::steady_clock::now();
   std::unique_lock<std::mutex> lock(m_mutex);
+  if (page != m_current) m_cursor.release();  // so that the page it leaves can be reused
   make_resident_locked(lock, page);
   enter_page_locked(page);
   m_stats.prepare_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -184,6 +199,8 @@ void Pager::read_step(std::uint64_t step, float* out) {
       m_stats.stall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     data = it->second;
+    // Playback leaves a page: the cursor lets go of it, so that its memory serves the next load.
+    if (page != m_current) m_cursor.release();
     enter_page_locked(page);
     load_waiting = m_request != kNone;
   }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <set>
 
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/streaming_encoder.h"
@@ -124,6 +125,76 @@ TEST(FieldFile, CorruptBytesAreDetectedAndNamed) {
     }
     EXPECT_TRUE(rejected) << "flipped byte " << i << " of " << bytes.size() << " went unnoticed";
   }
+}
+
+// Three fields one after another in time, so that a file's pages change method.
+testing::SyntheticField one_after_another(const std::vector<testing::SyntheticField>& parts) {
+  testing::SyntheticField all{parts[0].vertices, 0, {}, {}};
+  for (const auto& part : parts) {
+    const double start = all.times.empty() ? 0 : all.times.back() + 1;
+    for (double t : part.times) all.times.push_back(start + t);
+    all.values.insert(all.values.end(), part.values.begin(), part.values.end());
+    all.steps += part.steps;
+  }
+  return all;
+}
+
+TEST(FieldFile, LoadsIntoSharedBuffersMatchFreshLoadsAndReuseTheSparePage) {
+  const auto f = one_after_another({testing::smooth_blobs(700, 16), testing::white_noise(700, 16),
+                                    testing::shock_front(700, 16), testing::smooth_blobs(700, 5)});
+  const std::string path = temp_path("buffers.pnbf");
+  write_field(f, path, small_params());
+  const auto field = CompressedField::open(path);
+  ASSERT_EQ(field->page_count(), 7u);
+  std::set<PageMethod> methods;
+  for (std::size_t i = 0; i < field->page_count(); ++i) methods.insert(field->page(i).method);
+  ASSERT_GE(methods.size(), 2u) << "the pages should change method";
+  PageBuffers buffers;
+  std::vector<float> fresh_values, reused_values;
+  // Forward, then back: each page is parsed into the memory of one of another method, shape or size.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < field->page_count(); ++i) order.push_back(i);
+  for (std::size_t i = field->page_count(); i-- > 0;) order.push_back(i);
+  for (const std::size_t i : order) {
+    const auto fresh = field->load_page(i);
+    const EncodedPage* spare = buffers.spare.get();
+    auto reused = field->load_page(i, buffers);
+    if (spare) EXPECT_EQ(reused.get(), spare) << "page " << i << " did not reuse the spare page";
+    EXPECT_EQ(buffers.spare, nullptr);
+    EXPECT_EQ(reused->resident_bytes(), fresh->resident_bytes()) << "page " << i;
+    EXPECT_EQ(detail::serialize_page(*reused, std::uint32_t(i)), detail::serialize_page(*fresh, std::uint32_t(i))) << "page " << i;
+    fresh_values.resize(fresh->step_count * 700);
+    reused_values.resize(fresh_values.size());
+    decode_window(*fresh, fresh_values.data());
+    decode_window(*reused, reused_values.data());
+    ASSERT_EQ(0, std::memcmp(fresh_values.data(), reused_values.data(), fresh_values.size() * 4)) << "page " << i;
+    buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(reused));
+  }
+  // A spare that someone else still holds is left alone.
+  const auto held = buffers.spare;
+  const std::vector<std::uint8_t> before = detail::serialize_page(*held, 0);
+  const auto other = field->load_page(3, buffers);
+  EXPECT_NE(other.get(), held.get());
+  EXPECT_EQ(detail::serialize_page(*held, 0), before);
+}
+
+TEST(FieldFile, ACorruptPageLoadedIntoBuffersIsNamedAndTheBuffersServeTheNextLoad) {
+  const auto f = testing::smooth_blobs(300, 24);
+  const std::string path = temp_path("buffers-good.pnbf"), bad = temp_path("buffers-bad.pnbf");
+  write_field(f, path, small_params({BoundKind::absolute, 1e-3}));
+  auto bytes = testing::read_file(path);
+  const auto good = CompressedField::open(path);
+  bytes[good->page(1).offset + good->page(1).bytes - 5] ^= 0x5A;  // inside page 1's payload
+  testing::write_file(bad, bytes.data(), bytes.size());
+  const auto field = CompressedField::open(bad);
+  PageBuffers buffers;
+  buffers.spare = std::const_pointer_cast<EncodedPage>(field->load_page(0, buffers));
+  const EncodedPage* spare = buffers.spare.get();
+  testing::expect_error([&] { field->load_page(1, buffers); }, ErrorCode::io_error, {"page 1", "checksum"}, "page 1 corrupt");
+  EXPECT_EQ(buffers.spare.get(), spare);
+  const auto page2 = field->load_page(2, buffers);
+  EXPECT_EQ(page2.get(), spare);
+  EXPECT_EQ(detail::serialize_page(*page2, 2), detail::serialize_page(*good->load_page(2), 2));
 }
 
 TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {

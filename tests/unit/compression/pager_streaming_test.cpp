@@ -67,6 +67,8 @@ TEST(Pager, SequentialPlaybackDoesNotStall) {
   EXPECT_EQ(s.stalls, 0u);
   EXPECT_EQ(s.loads, 4u);
   EXPECT_EQ(s.prefetched, 4u);
+  // Pages 2 and 3 load into the memory of pages 0 and 1, which playback has left.
+  EXPECT_EQ(s.recycled, 2u);
 }
 
 TEST(Pager, PlaybackAfterPrepareNeverStallsFromAnyStartingStep) {

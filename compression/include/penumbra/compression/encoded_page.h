@@ -110,4 +110,18 @@ struct EncodedPage {
   std::uint64_t resident_bytes() const;
 };
 
+/// Calls f(a.x, b.x, ...) for every array x of an EncodedPage, the same member of each page at
+/// once: the one list of a page's arrays, for what must reach all of them.
+template <class F, class... Pages>
+void for_each_array(F&& f, Pages&... p) {
+  f(p.times...), f(p.c8...), f(p.cw...), f(p.mean_q...), f(p.i8...), f(p.iw...);
+  f(p.ca...), f(p.ca_q...), f(p.shift...), f(p.ia...);
+  f(p.blocks.group_offsets...), f(p.blocks.widths...), f(p.blocks.payload...), f(p.blocks.section_bits...);
+  f(p.lanes.widths...), f(p.lanes.transient_ends...), f(p.lanes.linear...), f(p.lanes.raw...);
+  f(p.lanes.exception_rows...), f(p.lanes.exception_steps...), f(p.lanes.exception_lanes...);
+  f(p.lanes.exception_bits...), f(p.lanes.raw_values...), f(p.lanes.words...);
+  f(p.lanes.bit_start...), f(p.lanes.raw_start...), f(p.lanes.row_start...), f(p.lanes.high_start...);
+  f(p.lanes.highs...);
+}
+
 }  // namespace penumbra::compression

@@ -15,7 +15,9 @@ namespace penumbra::compression {
 struct PagerOptions {
   /// Most bytes of loaded pages held at once (0: no cap). Must fit the largest page; the
   /// next page is prefetched only while current + next fit. Beside it, the pager's step cursor
-  /// holds 13 bytes per vertex (22 on a predictive page) while it plays a page with bit blocks.
+  /// holds 13 bytes per vertex (22 on a predictive page) while it plays a page with bit blocks,
+  /// and its background thread keeps the bytes of the largest page it has read, to read the next
+  /// into.
   std::uint64_t memory_cap_bytes = 0;
   /// Load the next page on a background thread when playback enters a page (Bernardon et
   /// al., sec. 5.3: current and next codebooks resident, so playback does not wait).
@@ -29,6 +31,7 @@ struct PagerStats {
   double prepare_seconds = 0;       ///< time prepare() waited (set-up before playback, not a stall)
   std::uint64_t loads = 0;          ///< pages loaded (either thread)
   std::uint64_t prefetched = 0;     ///< pages loaded ahead by the background thread
+  std::uint64_t recycled = 0;       ///< loads parsed into the memory of a page playback had left
   std::uint64_t resident_bytes = 0, peak_resident_bytes = 0;
 };
 
@@ -73,6 +76,10 @@ private:
   mutable std::mutex m_mutex;
   std::condition_variable m_wake, m_loaded;
   std::map<std::size_t, std::shared_ptr<const EncodedPage>> m_resident;
+  /// A page playback left that nothing else holds: the next load parses into its arrays
+  /// instead of touching fresh memory.
+  std::shared_ptr<const EncodedPage> m_spare;
+  PageBuffers m_prefetch_buffers;  ///< the background thread's
   static constexpr std::size_t kNone = ~std::size_t(0);
   std::size_t m_request = kNone, m_loading = kNone, m_current = kNone;
   std::size_t m_start = 0;  ///< page of the last start_at(), kept while no page is current

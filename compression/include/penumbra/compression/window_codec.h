@@ -64,6 +64,10 @@ public:
   StepCursor(StepCursor&&) noexcept;
   StepCursor& operator=(StepCursor&&) noexcept;
   void decode(const std::shared_ptr<const EncodedPage>& page, std::uint32_t local_step, float* out);
+  /// Lets go of the page it holds, keeping its own memory for the next; the next decode starts
+  /// afresh. A pager calls it when playback leaves a page, so that the page's memory can serve
+  /// the next load.
+  void release() { m_page.reset(); }
 
 private:
   std::shared_ptr<const EncodedPage> m_page;
