@@ -205,7 +205,7 @@ Row run_penumbra(const Field& f, const std::string& scratch, pc::CodecParams par
   std::ostringstream extra;
   extra << ",\"train_s_max\":" << st.max_train_seconds << ",\"decode_with_load_mbps\":" << raw_mb / load_decode_s
         << ",\"solver_waits\":" << st.solver_waits
-        << ",\"pager_stalls\":" << ps.stalls << ",\"pager_prepare_ms\":" << ps.prepare_seconds * 1e3
+        << ",\"pager_stalls\":" << ps.stalls << ",\"pager_recycled\":" << ps.recycled << ",\"pager_prepare_ms\":" << ps.prepare_seconds * 1e3
         << ",\"step_resident_mverts\":" << double(f.vertices) * f.steps / resident_s / 1e6 << ",\"pages\":\"" << methods << "\"";
   if (cold)
     extra << ",\"cold_decode_mbps\":" << raw_mb / cold_decode_s << ",\"cold_memcpy_gbps\":" << raw_mb / cold_copy_s / 1e3
