@@ -60,7 +60,7 @@ EncodedPage parse_page_payload(const PageHeader& header, const std::uint8_t* pay
 
 /// The same into `page`, whose arrays keep their memory: parsing page after page into one
 /// EncodedPage touches no fresh memory once its arrays are large enough (a first touch costs
-/// about 12 us per 4 KiB on a virtual machine, which held page loads to about 120 MB/s). What
+/// about 12 us per 4 KiB on a virtual machine, which held page loads to 90-130 MB/s). What
 /// `page` held before is gone, also when this throws.
 void parse_page_payload(const PageHeader& header, const std::uint8_t* payload, std::uint64_t vertex_count,
                         std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,

@@ -72,7 +72,7 @@ struct OpenOptions {
 /// that no one else holds, whose arrays the next load fills again. Loading page after page into
 /// the same buffers touches no fresh memory once they are large enough. A first touch of a 4 KiB
 /// page costs about 12 us on a virtual machine, which held loads of 50-170 MB pages to
-/// 110-130 MB/s; Pager keeps one for its background loads.
+/// 90-130 MB/s; Pager keeps one for its background loads.
 struct PageBuffers {
   std::vector<std::uint8_t> bytes;
   std::shared_ptr<EncodedPage> spare;
