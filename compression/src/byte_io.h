@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "huge_pages.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::compression::detail {
@@ -46,6 +47,7 @@ public:
   template <class T>
   void get_array(std::vector<T>& out, std::uint64_t count, std::size_t padding_bytes = 0) {
     if (count > (m_size - m_pos) / sizeof(T)) fail("ends inside an array");
+    reserve_on_huge_pages(out, count + (padding_bytes + sizeof(T) - 1) / sizeof(T));
     out.resize(count + (padding_bytes + sizeof(T) - 1) / sizeof(T));
     take(out.data(), count * sizeof(T));
     if (padding_bytes) std::memset(reinterpret_cast<std::uint8_t*>(out.data()) + count * sizeof(T), 0, padding_bytes);

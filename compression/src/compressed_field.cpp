@@ -10,6 +10,7 @@
 #include "byte_io.h"
 #include "crc32.h"
 #include "file_layout.h"
+#include "huge_pages.h"
 #include "page_format.h"
 #include "page_methods.h"
 #include "penumbra/compression/field_file.h"
@@ -228,7 +229,10 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index,
   const std::string name = "compressed field '" + m_path + "': " + page_name(index);
   // Grown, never shrunk: the next page of the field is about as large.
   std::vector<std::uint8_t>& bytes = buffers.bytes;
-  if (bytes.size() < e.bytes) bytes.resize(e.bytes);
+  if (bytes.size() < e.bytes) {
+    detail::reserve_on_huge_pages(bytes, e.bytes);
+    bytes.resize(e.bytes);
+  }
   read_at(m_fd, m_path, e.offset, bytes.data(), e.bytes, page_name(index));
   detail::PageHeader h;
   if (!detail::parse_page_header(bytes.data(), h)) throw Error(ErrorCode::io_error, name + ": header is corrupt");

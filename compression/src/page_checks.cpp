@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "huge_pages.h"
 #include "lane_blocks.h"
 #include "page_methods.h"
 #include "vertex_section.h"
@@ -40,7 +41,10 @@ std::string sections_error(const EncodedPage& p, std::vector<std::uint32_t>* der
   for (std::uint64_t g = 0; g < groups; ++g)
     if (b.group_offsets[g] > b.group_offsets[g + 1])
       return "group table is not increasing at vertex group " + std::to_string(g);
-  if (derive) derive->resize(N);
+  if (derive) {
+    reserve_on_huge_pages(*derive, N);
+    derive->resize(N);
+  }
   // Every group's sections must fill exactly its bytes, each parsed without reading past its
   // group: the decoders then never read outside the payload. A group holds at most 128 raw
   // sections of 1024 float32 values, 2^22 bits, so the per-vertex offsets fit 32 bits.

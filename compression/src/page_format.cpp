@@ -133,6 +133,7 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   r.get_array(L.raw_values, raw);
   const std::uint64_t words = kLaneBlock * lane_word_rows(bits);
   if (words > r.remaining() / 4) r.fail("ends inside the lane words");
+  reserve_on_huge_pages(L.words, kLaneBlock + words);
   L.words.assign(kLaneBlock + words, 0);  // the zero row, then the file's rows
   r.take(L.words.data() + kLaneBlock, words * 4);
   if (version < 4) flip_lane_slot_signs(p, L.words.data() + kLaneBlock);
@@ -286,6 +287,7 @@ void parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::u
     p.mean_lo = r.get<float>();
     p.mean_scale = r.get<float>();
     r.get_array(p.c8, std::uint64_t(K) * 8);
+    reserve_on_huge_pages(p.cw, std::size_t(K) * W);
     p.cw.assign(std::size_t(K) * W, 0.f);
     for (std::uint32_t e = 0; e < K; ++e) r.take(p.cw.data() + std::size_t(e) * W, std::size_t(h.step_count) * 4);
     r.get_array(p.mean_q, N);
