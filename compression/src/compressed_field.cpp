@@ -242,8 +242,7 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index,
   const std::uint8_t* payload = bytes.data() + detail::PageHeader::kBytes;
   if (detail::crc32(payload, h.payload_bytes) != h.payload_crc)
     throw Error(ErrorCode::io_error, name + ": checksum mismatch (the page is corrupt)");
-  std::shared_ptr<EncodedPage> page = std::move(buffers.spare);
-  buffers.spare.reset();
+  std::shared_ptr<EncodedPage> page = std::move(buffers.spare);  // leaves spare empty
   if (!page || page.use_count() != 1) page = std::make_shared<EncodedPage>();
   try {
     detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window, m_info.codebook_size, name, m_version,

@@ -70,6 +70,12 @@ void Pager::evict_locked(std::size_t keep_a, std::size_t keep_b) {
   }
 }
 
+const EncodedPage* Pager::hand_spare_locked(PageBuffers& buffers) {
+  // The spare was made by load_page, not const, and only this pager holds it.
+  buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(m_spare));
+  return buffers.spare.get();
+}
+
 void Pager::request_prefetch_locked(std::size_t page) {
   if (!m_options.prefetch || page >= m_field->page_count() || m_resident.count(page) || m_loading == page ||
       m_request == page)
@@ -97,10 +103,7 @@ void Pager::prefetch_loop() {
     m_request = kNone;
     if (m_resident.count(page)) continue;
     m_loading = page;
-    // The spare was made by load_page, not const; only this pager held it.
-    m_prefetch_buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(m_spare));
-    m_spare.reset();
-    const EncodedPage* spare = m_prefetch_buffers.spare.get();
+    const EncodedPage* spare = hand_spare_locked(m_prefetch_buffers);
     lock.unlock();
     std::shared_ptr<const EncodedPage> data;
     try {
@@ -133,9 +136,7 @@ std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator Pager::make_
   }
   if (m_request == page) m_request = kNone;  // loaded here: the prefetcher must not load it again
   PageBuffers buffers;
-  buffers.spare = std::const_pointer_cast<EncodedPage>(std::move(m_spare));
-  m_spare.reset();
-  const EncodedPage* spare = buffers.spare.get();
+  const EncodedPage* spare = hand_spare_locked(buffers);
   lock.unlock();
   auto loaded = m_field->load_page(page, buffers);  // throws naming the page if it is bad
   lock.lock();

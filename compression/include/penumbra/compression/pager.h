@@ -69,6 +69,9 @@ private:
   std::map<std::size_t, std::shared_ptr<const EncodedPage>>::iterator make_resident_locked(
       std::unique_lock<std::mutex>& lock, std::size_t page);
   void evict_locked(std::size_t keep_a, std::size_t keep_b);
+  /// Gives the spare page to a load's buffers; returns it (null if none), to tell whether the
+  /// load reused it.
+  const EncodedPage* hand_spare_locked(PageBuffers& buffers);
   void insert_locked(std::size_t page, std::shared_ptr<const EncodedPage> data);
 
   std::shared_ptr<const CompressedField> m_field;
