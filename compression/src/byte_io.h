@@ -47,11 +47,11 @@ public:
   template <class T>
   void get_array(std::vector<T>& out, std::uint64_t count, std::size_t padding_bytes = 0) {
     if (count > (m_size - m_pos) / sizeof(T)) fail("ends inside an array");
-    reserve_on_huge_pages(out, count + (padding_bytes + sizeof(T) - 1) / sizeof(T));
-    out.resize(count + (padding_bytes + sizeof(T) - 1) / sizeof(T));
+    const std::uint64_t size = count + (padding_bytes + sizeof(T) - 1) / sizeof(T);
+    reserve_on_huge_pages(out, size);
+    out.resize(size);
     take(out.data(), count * sizeof(T));
     if (padding_bytes) std::memset(reinterpret_cast<std::uint8_t*>(out.data()) + count * sizeof(T), 0, padding_bytes);
-    out.resize(count + (padding_bytes + sizeof(T) - 1) / sizeof(T));
   }
   void take(void* out, std::size_t bytes) {
     if (bytes > m_size - m_pos) fail("ends early");

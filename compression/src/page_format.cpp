@@ -139,6 +139,18 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   if (version < 4) flip_lane_slot_signs(p, L.words.data() + kLaneBlock);
 }
 
+// Sets every field of `page` to its default, its arrays empty but keeping their memory.
+void reset_keeping_memory(EncodedPage& page) {
+  EncodedPage fresh;
+  for_each_array(
+      [](auto& to, auto& from) {
+        from.clear();
+        to.swap(from);
+      },
+      fresh, page);
+  page = std::move(fresh);
+}
+
 }  // namespace
 
 std::uint32_t max_method_of_version(std::uint32_t version) {
@@ -244,17 +256,6 @@ bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
   std::memcpy(&header.vq_bytes_estimate, h + 52, 4);
   std::memcpy(&header.predictive_bytes_estimate, h + 56, 4);
   return true;
-}
-
-void reset_keeping_memory(EncodedPage& page) {
-  EncodedPage fresh;
-  for_each_array(
-      [](auto& to, auto& from) {
-        from.clear();
-        to.swap(from);
-      },
-      fresh, page);
-  page = std::move(fresh);
 }
 
 EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,

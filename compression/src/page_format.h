@@ -66,7 +66,4 @@ void parse_page_payload(const PageHeader& header, const std::uint8_t* payload, s
                         std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,
                         std::uint32_t format_version, EncodedPage& page);
 
-/// Sets every field of `page` to its default, its arrays empty but keeping their memory.
-void reset_keeping_memory(EncodedPage& page);
-
 }  // namespace penumbra::compression::detail

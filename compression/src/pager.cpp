@@ -77,18 +77,19 @@ const EncodedPage* Pager::hand_spare_locked(PageBuffers& buffers) {
 }
 
 void Pager::request_prefetch_locked(std::size_t page) {
-  if (!m_options.prefetch || page >= m_field->page_count() || m_resident.count(page) || m_loading == page ||
-      m_request == page)
-    return;
-  if (m_options.memory_cap_bytes) {
+  if (m_loading == page || m_request == page) return;  // a load is on its way: it takes the spare
+  bool wanted = m_options.prefetch && page < m_field->page_count() && !m_resident.count(page);
+  if (wanted && m_options.memory_cap_bytes) {
     // The index entry stands in for the loaded size (they differ by a few vector headers).
     std::uint64_t held = 0;
     for (const auto& [index, data] : m_resident)
       if (index == m_current) held += data->resident_bytes();
-    if (held + loaded_bytes(*m_field, m_field->page(page)) + 4096 > m_options.memory_cap_bytes) {
-      m_spare.reset();  // no load will take it: its memory counts against the cap no longer
-      return;
-    }
+    wanted = held + loaded_bytes(*m_field, m_field->page(page)) + 4096 <= m_options.memory_cap_bytes;
+  }
+  if (!wanted) {
+    // No load will take the spare soon; under a cap its memory must not stay beside the pages.
+    if (m_options.memory_cap_bytes) m_spare.reset();
+    return;
   }
   m_request = page;
   m_wake.notify_all();
