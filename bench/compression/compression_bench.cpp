@@ -1,7 +1,7 @@
 // bench/compression/compression_bench.cpp -- Penumbra's time-window VQ codec against ZFP,
 // fpzip and temporal delta + zstd on one field; prints one JSON object per line.
 //
-// usage: pnb_bench_compression --field smooth|shock|eeg|raw:PATH:NAME [--vertices N] [--steps T]
+// usage: pnb_bench_compression --field smooth|shock|eeg|raw:PATH[:NAME] [--vertices N] [--steps T]
 //                              [--scratch DIR] [--no-peers]
 #include <chrono>
 #include <cmath>

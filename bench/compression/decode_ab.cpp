@@ -2,7 +2,7 @@
 // libpenumbra_compression.so in one process, round by round beside a memcpy of the same bytes;
 // prints one JSON object per build.
 //
-// usage: pnb_decode_ab --field smooth|shock|shock-nonuniform|eeg|raw:PATH:NAME [--vertices N]
+// usage: pnb_decode_ab --field smooth|shock|shock-nonuniform|eeg|raw:PATH[:NAME] [--vertices N]
 //                      [--steps T] [--bound REL] [--rounds R] [--same-blocks W1,W2,W3,W,T,LINEAR]
 //                      LIBRARY...
 //
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     else builds.push_back(Build{a, nullptr, {}});
   }
   if (field_spec.empty() || builds.empty()) {
-    std::fprintf(stderr, "usage: %s --field NAME|raw:PATH:NAME [--vertices N] [--steps T] [--bound REL] "
+    std::fprintf(stderr, "usage: %s --field NAME|raw:PATH[:NAME] [--vertices N] [--steps T] [--bound REL] "
                          "[--rounds R] [--same-blocks W1,W2,W3,W,T,LINEAR] LIBRARY...\n", argv[0]);
     return 2;
   }

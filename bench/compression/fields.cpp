@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <random>
@@ -146,8 +147,10 @@ Field load_raw_field(const std::string& path, const std::string& name) {
 
 Field field_from_spec(const std::string& spec, std::uint64_t vertices, std::uint32_t steps) {
   if (spec.rfind("raw:", 0) != 0) return synthetic_field(spec, vertices, steps);
+  // raw:PATH[:NAME]; without a name, the field is called after its file.
   const auto colon = spec.find(':', 4);
-  return load_raw_field(spec.substr(4, colon - 4), spec.substr(colon + 1));
+  const std::string path = spec.substr(4, colon == std::string::npos ? std::string::npos : colon - 4);
+  return load_raw_field(path, colon == std::string::npos ? std::filesystem::path(path).stem().string() : spec.substr(colon + 1));
 }
 
 penumbra::compression::StreamingStats write_field_file(const Field& f, const std::string& path,
