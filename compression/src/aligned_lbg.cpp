@@ -7,6 +7,7 @@
 
 #include "penumbra/core/error.h"
 #include "lbg_split.h"
+#include "target_region.h"
 #include "penumbra/core/thread_pool.h"
 
 namespace penumbra::compression::detail {
@@ -16,10 +17,8 @@ namespace {
 // acc[r * kp + e] = sum over positions j in [a, a + n) of x_r[j] * c[e][j] for `rows` (<= 4)
 // vectors sharing the range, all entries at once: one vectorisable sweep per position over
 // the transposed codebook, each row load shared by the vectors.
-__attribute__((target_clones("avx2", "default"))) void dot_range(const float* const* x, std::size_t rows,
-                                                                 std::uint32_t a, std::uint32_t n,
-                                                                 const float* transposed, std::uint32_t kp,
-                                                                 float* acc) {
+PNB_AVX2_CLONES void dot_range(const float* const* x, std::size_t rows, std::uint32_t a, std::uint32_t n,
+                               const float* transposed, std::uint32_t kp, float* acc) {
   for (std::size_t r = 0; r < 4 * std::size_t(kp); ++r) acc[r] = 0.f;
   const float* x0 = x[0];
   const float* x1 = x[rows > 1 ? 1 : 0];

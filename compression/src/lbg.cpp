@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "lbg_split.h"
+#include "target_region.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 
@@ -18,10 +19,8 @@ constexpr std::size_t kRows = 4;  // vectors scored together, sharing each codeb
 // Scores kRows vectors against all entries: |c|^2 - 2 x.c (|x|^2 is common to all entries).
 // Compiled for AVX2 and baseline; the loader picks one at run time. Results are identical
 // for a fixed machine, which is all the encoder's determinism needs.
-__attribute__((target_clones("avx2", "default"))) void score_rows(const float* x, std::size_t rows,
-                                                                  std::uint32_t dim, const float* transposed,
-                                                                  const float* norms, std::uint32_t kp,
-                                                                  float* acc) {
+PNB_AVX2_CLONES void score_rows(const float* x, std::size_t rows, std::uint32_t dim, const float* transposed,
+                                const float* norms, std::uint32_t kp, float* acc) {
   for (std::size_t r = 0; r < kRows * kp; ++r) acc[r] = 0.f;
   for (std::uint32_t j = 0; j < dim; ++j) {
     const float* row = transposed + std::size_t(j) * kp;
