@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "huge_pages.h"
 #include "page_methods.h"
 #include "penumbra/core/error.h"
 
@@ -52,7 +53,10 @@ StreamingEncoder::StreamingEncoder(StreamingOptions options) : m_options(std::mo
                       " bytes); raise the budget or shorten the window");
   }
   m_stats.buffers = buffers;
-  m_buffers.assign(buffers, std::vector<float>(m_options.vertex_count * c.window));
+  // Left unwritten until push fills them: zeroing (and copying) gigabytes here held the solver
+  // up for seconds at millions of vertices, one first touch of each page at a time.
+  for (std::uint32_t b = 0; b < buffers; ++b)
+    m_buffers.push_back(detail::uninitialised_on_huge_pages<float>(m_options.vertex_count * c.window));
   m_busy.assign(buffers, false);
   FieldInfo info;
   info.name = m_options.field_name;
@@ -111,7 +115,7 @@ void StreamingEncoder::push(double time, const float* values) {
     std::lock_guard<std::mutex> lock(m_mutex);
     rethrow_locked();
   }
-  std::memcpy(m_buffers[m_filling].data() + std::uint64_t(m_filled) * N, values, N * 4);
+  std::memcpy(m_buffers[m_filling].get() + std::uint64_t(m_filled) * N, values, N * 4);
   if (m_step == 0) m_min = lo, m_max = hi;
   m_min = std::min(m_min, lo);
   m_max = std::max(m_max, hi);
@@ -145,7 +149,7 @@ void StreamingEncoder::worker_loop() {
     try {
       if (!m_error) {
         WindowStats ws;
-        const auto page = encode_window(m_buffers[job.buffer].data(), m_options.vertex_count, job.steps,
+        const auto page = encode_window(m_buffers[job.buffer].get(), m_options.vertex_count, job.steps,
                                         job.times.data(), job.first_step, m_options.codec, job.bound, &m_warm, &ws);
         m_writer->write_page(page);
         lock.lock();

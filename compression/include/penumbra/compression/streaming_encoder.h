@@ -73,7 +73,7 @@ private:
 
   StreamingOptions m_options;
   std::unique_ptr<FieldWriter> m_writer;
-  std::vector<std::vector<float>> m_buffers;
+  std::vector<std::unique_ptr<float[]>> m_buffers;  // vertex_count x window each, uninitialised
   std::vector<bool> m_busy;
   std::size_t m_filling = 0;
   std::uint32_t m_filled = 0;
