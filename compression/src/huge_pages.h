@@ -1,5 +1,6 @@
-// compression/src/huge_pages.h -- room for a large array on transparent huge pages (private).
+// compression/src/huge_pages.h -- large arrays on transparent huge pages, faulted in ahead of use (private).
 #pragma once
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -25,6 +26,27 @@ inline void advise_huge_pages(const void* p, std::size_t bytes) {
   if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
 #else
   (void)p, (void)bytes;
+#endif
+}
+
+/// Faults [p, p + bytes) in for writing without writing to it (Linux 5.14 and later:
+/// MADV_POPULATE_WRITE), so that the first writes there later do not stop for the kernel; as it
+/// stores nothing, another thread may write the same memory meanwhile. Works through it
+/// `chunk` bytes at a time while keep_going() holds. Returns false where the kernel cannot
+/// (nothing is done then).
+template <class KeepGoing>
+bool populate_for_writing(void* p, std::size_t bytes, std::size_t chunk, KeepGoing keep_going) {
+#if defined(__linux__) && defined(MADV_POPULATE_WRITE)
+  constexpr std::uintptr_t kPage = 4096;
+  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(p) + kPage - 1) & ~(kPage - 1);
+  const std::uintptr_t end = (reinterpret_cast<std::uintptr_t>(p) + bytes) & ~(kPage - 1);
+  for (std::uintptr_t at = begin; at < end && keep_going(); at += chunk)
+    if (::madvise(reinterpret_cast<void*>(at), std::min<std::uintptr_t>(chunk, end - at), MADV_POPULATE_WRITE) != 0)
+      return false;
+  return true;
+#else
+  (void)p, (void)bytes, (void)chunk, (void)keep_going;
+  return false;
 #endif
 }
 
