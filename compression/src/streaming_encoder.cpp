@@ -141,12 +141,13 @@ void StreamingEncoder::submit(std::uint32_t steps) {
 void StreamingEncoder::worker_loop() {
   // The window buffers' memory is faulted in here, while the solver fills the first window, so
   // that its pushes do not each stop for the kernel's first touch of their pages (2M vertices:
-  // 26-32 ms per push over the first two windows, against 8 once the pages are there).
+  // 26-32 ms per push over the first two windows, against 8 once the pages are there). Only
+  // while idle: once a window is submitted (full, or the last at finish) its encoding comes first.
   const std::uint64_t bytes = m_options.vertex_count * m_options.codec.window * 4;
   for (const auto& buffer : m_buffers)
     if (!detail::populate_for_writing(buffer.get(), bytes, std::size_t(32) << 20, [&] {
-          std::lock_guard<std::mutex> stop(m_mutex);
-          return !m_stop;
+          std::lock_guard<std::mutex> idle(m_mutex);
+          return !m_stop && m_jobs.empty();
         }))
       break;
   std::unique_lock<std::mutex> lock(m_mutex);
