@@ -83,6 +83,30 @@ TEST(Lbg, NearestSearchMatchesBruteForce) {
   }
 }
 
+TEST(Lbg, NearestSearchBreaksTiesTowardTheLowestEntry) {
+  // Copies of one entry score exactly alike; the first copy wins wherever the copies fall among
+  // the vector lanes and tiles of the scoring (k = 256: 16 tiles of 16 entries).
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(-1, 1);
+  const std::uint32_t k = 256, dim = 64;
+  std::vector<float> cb(k * dim);
+  for (auto& c : cb) c = u(rng);
+  const std::uint32_t copies[][3] = {{3, 11, 200}, {17, 18, 255}, {0, 8, 16}, {100, 131, 254}};
+  std::vector<float> x;
+  for (const auto& c : copies) {
+    for (std::uint32_t j = 0; j < dim; ++j) cb[c[1] * dim + j] = cb[c[2] * dim + j] = cb[c[0] * dim + j];
+    x.insert(x.end(), cb.begin() + c[0] * dim, cb.begin() + (c[0] + 1) * dim);
+  }
+  NearestSearch s(cb.data(), k, dim);
+  std::vector<std::uint8_t> idx(4);
+  s.nearest(x.data(), 4, idx.data());
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(idx[i], copies[i][0]) << "vector " << i;
+  std::vector<std::uint8_t> top(4 * 3);
+  s.nearest_m(x.data(), 4, 3, top.data());
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(top[i * 3 + j], copies[i][j]) << "vector " << i << ", rank " << j;
+}
+
 TEST(WindowCodec, SmoothFieldRoundTripIsAccurateAndCompact) {
   const auto f = testing::smooth_blobs(6000, 64);
   const CodecParams p;
