@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "penumbra/core/error.h"
+#include "dot_rows.h"
 #include "lbg_split.h"
 #include "target_region.h"
 #include "penumbra/core/thread_pool.h"
@@ -15,30 +16,12 @@ namespace penumbra::compression::detail {
 namespace {
 
 // acc[r * kp + e] = sum over positions j in [a, a + n) of x_r[j] * c[e][j] for `rows` (<= 4)
-// vectors sharing the range, all entries at once: one vectorisable sweep per position over
-// the transposed codebook, each row load shared by the vectors.
+// vectors sharing the range (rows past `rows` repeat the first; their sums are not read).
 PNB_AVX2_CLONES void dot_range(const float* const* x, std::size_t rows, std::uint32_t a, std::uint32_t n,
                                const float* transposed, std::uint32_t kp, float* acc) {
-  for (std::size_t r = 0; r < 4 * std::size_t(kp); ++r) acc[r] = 0.f;
-  const float* x0 = x[0];
-  const float* x1 = x[rows > 1 ? 1 : 0];
-  const float* x2 = x[rows > 2 ? 2 : 0];
-  const float* x3 = x[rows > 3 ? 3 : 0];
-  float* a0 = acc;
-  float* a1 = acc + kp;
-  float* a2 = acc + 2 * kp;
-  float* a3 = acc + 3 * kp;
-  for (std::uint32_t j = a; j < a + n; ++j) {
-    const float* row = transposed + std::size_t(j) * kp;
-    const float v0 = x0[j], v1 = x1[j], v2 = x2[j], v3 = x3[j];
-    for (std::uint32_t e = 0; e < kp; ++e) {
-      const float c = row[e];
-      a0[e] += v0 * c;
-      a1[e] += v1 * c;
-      a2[e] += v2 * c;
-      a3[e] += v3 * c;
-    }
-  }
+  const float* row_x[kDotRows];
+  for (std::size_t r = 0; r < kDotRows; ++r) row_x[r] = x[r < rows ? r : 0];
+  dot_rows(row_x, a, n, transposed, kp, acc);
 }
 
 double assign_all(const PartialVectors& set, const std::vector<float>& codebook, std::uint32_t k,

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "dot_rows.h"
 #include "lbg_split.h"
 #include "target_region.h"
 #include "penumbra/core/error.h"
@@ -14,55 +15,17 @@ namespace penumbra::compression {
 
 namespace {
 
-constexpr std::size_t kRows = 4;  // vectors scored together, sharing each codebook row load
-
-using Lanes8 = float __attribute__((vector_size(32), aligned(4)));  // unaligned loads and stores
-
-// The x.c sums of kRows vectors with a tile of kTileVectors * 8 entries, kept in registers over
-// the whole dimension: summed in memory, every multiply-add paid a load and a store. Each sum
-// still adds its products in dimension order, without fused multiply-adds, so the scores are
-// those of a plain loop.
-template <std::size_t kTileVectors>
-inline __attribute__((always_inline)) void score_tile(const float* const* x, std::uint32_t dim, const float* transposed,
-                                                      std::uint32_t kp, std::uint32_t e0, Lanes8 (&sums)[kRows][2]) {
-  for (std::size_t r = 0; r < kRows; ++r)
-    for (std::size_t v = 0; v < kTileVectors; ++v) sums[r][v] = Lanes8{};
-  for (std::uint32_t j = 0; j < dim; ++j) {
-    Lanes8 c[kTileVectors];
-    for (std::size_t v = 0; v < kTileVectors; ++v)
-      c[v] = *reinterpret_cast<const Lanes8*>(transposed + std::size_t(j) * kp + e0 + 8 * v);
-    for (std::size_t r = 0; r < kRows; ++r) {
-      const float xr = x[r][j];
-      for (std::size_t v = 0; v < kTileVectors; ++v) sums[r][v] += xr * c[v];
-    }
-  }
-}
+constexpr std::size_t kRows = detail::kDotRows;  // vectors scored together
 
 // Scores kRows vectors against all entries: |c|^2 - 2 x.c (|x|^2 is common to all entries).
-// Rows past `rows` score a zero vector, read from `zeros` (dim floats). Compiled for AVX2 and
+// Rows past `rows` repeat the first vector; their scores are not read. Compiled for AVX2 and
 // baseline; the loader picks one at run time. Results are identical for a fixed machine, which
 // is all the encoder's determinism needs.
 PNB_AVX2_CLONES void score_rows(const float* x, std::size_t rows, std::uint32_t dim, const float* transposed,
-                                const float* norms, std::uint32_t kp, float* acc, const float* zeros) {
+                                const float* norms, std::uint32_t kp, float* acc) {
   const float* row_x[kRows];
-  for (std::size_t r = 0; r < kRows; ++r) row_x[r] = r < rows ? x + r * dim : zeros;
-  Lanes8 sums[kRows][2];
-  const auto finish = [&](std::uint32_t e0, std::size_t vectors) {
-    for (std::size_t r = 0; r < kRows; ++r)
-      for (std::size_t v = 0; v < vectors; ++v) {
-        const Lanes8 n = *reinterpret_cast<const Lanes8*>(norms + e0 + 8 * v);
-        *reinterpret_cast<Lanes8*>(acc + r * kp + e0 + 8 * v) = n - 2.f * sums[r][v];
-      }
-  };
-  std::uint32_t e0 = 0;
-  for (; e0 + 16 <= kp; e0 += 16) {
-    score_tile<2>(row_x, dim, transposed, kp, e0, sums);
-    finish(e0, 2);
-  }
-  if (e0 < kp) {  // kp is a multiple of 8
-    score_tile<1>(row_x, dim, transposed, kp, e0, sums);
-    finish(e0, 1);
-  }
+  for (std::size_t r = 0; r < kRows; ++r) row_x[r] = x + (r < rows ? r : 0) * dim;
+  detail::dot_rows(row_x, 0, dim, transposed, kp, acc, norms);
 }
 
 // The entry a scan "best = 0; for each e, if s[e] < s[best] then best = e" picks over kp scores
@@ -70,6 +33,7 @@ PNB_AVX2_CLONES void score_rows(const float* x, std::size_t rows, std::uint32_t 
 // equal ones, NaN scores never replacing a number. Each vector lane keeps the first lowest of
 // its entries, then the lanes' results are compared; the scan, a compare and a branch per entry,
 // cost as much as the scoring's sums.
+using detail::Lanes8;
 using Indices8 = std::int32_t __attribute__((vector_size(32)));
 PNB_AVX2_CLONES std::uint32_t lowest_score(const float* s, std::uint32_t kp) {
   if (std::isnan(s[0])) return 0;
@@ -107,11 +71,10 @@ NearestSearch::NearestSearch(const float* codebook, std::uint32_t k, std::uint32
 }
 
 void NearestSearch::nearest(const float* vectors, std::size_t count, std::uint8_t* indices, float* distances) const {
-  std::vector<float> acc(kRows * m_k_padded), zeros(m_dim, 0.f);
+  std::vector<float> acc(kRows * m_k_padded);
   for (std::size_t i = 0; i < count; i += kRows) {
     const std::size_t rows = std::min(kRows, count - i);
-    score_rows(vectors + i * m_dim, rows, m_dim, m_transposed.data(), m_norms.data(), m_k_padded, acc.data(),
-               zeros.data());
+    score_rows(vectors + i * m_dim, rows, m_dim, m_transposed.data(), m_norms.data(), m_k_padded, acc.data());
     for (std::size_t r = 0; r < rows; ++r) {
       const std::uint32_t best = lowest_score(acc.data() + r * m_k_padded, m_k_padded);
       indices[i + r] = std::uint8_t(best);
@@ -131,12 +94,11 @@ void NearestSearch::nearest(const float* vectors, std::size_t count, std::uint8_
 
 void NearestSearch::nearest_m(const float* vectors, std::size_t count, std::uint32_t m, std::uint8_t* indices) const {
   m = std::min(m, m_k);
-  std::vector<float> acc(kRows * m_k_padded), zeros(m_dim, 0.f);
+  std::vector<float> acc(kRows * m_k_padded);
   std::vector<std::pair<float, std::uint32_t>> best(m);
   for (std::size_t i = 0; i < count; i += kRows) {
     const std::size_t rows = std::min(kRows, count - i);
-    score_rows(vectors + i * m_dim, rows, m_dim, m_transposed.data(), m_norms.data(), m_k_padded, acc.data(),
-               zeros.data());
+    score_rows(vectors + i * m_dim, rows, m_dim, m_transposed.data(), m_norms.data(), m_k_padded, acc.data());
     for (std::size_t r = 0; r < rows; ++r) {
       const float* s = acc.data() + r * m_k_padded;
       // Insertion into a sorted list of m: m is small (a handful of candidates).

@@ -12,6 +12,7 @@
 #include "page_methods.h"
 #include "lane_blocks.h"
 #include "predictive_layout.h"
+#include "round_to_integer.h"
 #include "splitmix.h"
 #include "value_layout.h"
 #include "penumbra/compression/lbg.h"
@@ -254,7 +255,7 @@ Coded write_raw(const float* x, std::uint32_t steps, BitWriter* writer) {
 Coded encode_residual(const float* x, std::uint32_t steps, const float* base, float step, float bound,
                       BitWriter* writer, std::uint32_t* z) {
   for (std::uint32_t t = 0; t < steps; ++t) {
-    const double q = std::nearbyint((double(x[t]) - base[t]) / step);
+    const double q = detail::round_to_integer((double(x[t]) - base[t]) / step);
     if (!(std::fabs(q) < double(1 << 20))) return write_raw(x, steps, writer);
     const float rebuilt = base[t] + float(q) * step;
     if (std::fabs(double(x[t]) - double(rebuilt)) > bound) return write_raw(x, steps, writer);
@@ -298,7 +299,7 @@ void encode_vertices(EncodedPage& page, std::uint64_t N, std::uint32_t W, std::u
 Coded encode_predictive(const float* x, std::uint32_t steps, float lo, float step, float bound,
                         std::uint32_t first_width, BitWriter* writer, std::int64_t* k, std::uint32_t* z) {
   for (std::uint32_t t = 0; t < steps; ++t) {
-    const double kd = std::nearbyint((double(x[t]) - lo) / step);
+    const double kd = detail::round_to_integer((double(x[t]) - lo) / step);
     const float rebuilt = lo + float(kd) * step;
     if (!(kd >= 0 && kd < double(1ull << first_width)) || std::fabs(double(x[t]) - double(rebuilt)) > bound)
       return write_raw(x, steps, writer);

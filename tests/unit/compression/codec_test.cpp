@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "round_to_integer.h"
 #include "penumbra/compression/lbg.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
@@ -105,6 +106,24 @@ TEST(Lbg, NearestSearchBreaksTiesTowardTheLowestEntry) {
   s.nearest_m(x.data(), 4, 3, top.data());
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 3; ++j) EXPECT_EQ(top[i * 3 + j], copies[i][j]) << "vector " << i << ", rank " << j;
+}
+
+TEST(Quantiser, RoundToIntegerIsNearbyintBelowTwoToThe51) {
+  // The quantisers round by adding and subtracting 1.5 * 2^52; a flag that let the compiler
+  // reassociate floating-point sums would turn that into no rounding at all.
+  std::vector<double> values;
+  for (int i = -4000; i <= 4000; ++i) values.push_back(i * 0.25);  // ties at every odd half
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> exponent(-20, 51), unit(0, 1);
+  for (int i = 0; i < 100000; ++i) {
+    const double v = std::exp2(exponent(rng)) * unit(rng);
+    values.push_back(v);
+    values.push_back(-v);
+  }
+  const double top = std::exp2(51);
+  for (double v : {top - 0.5, top - 1.5, -(top - 0.5), 0.5 + std::exp2(-30), 4294967295.5, 4294967296.49})
+    values.push_back(v);
+  for (double v : values) ASSERT_EQ(detail::round_to_integer(v), std::nearbyint(v)) << std::hexfloat << v;
 }
 
 TEST(WindowCodec, SmoothFieldRoundTripIsAccurateAndCompact) {
