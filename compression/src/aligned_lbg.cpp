@@ -15,13 +15,16 @@ namespace penumbra::compression::detail {
 
 namespace {
 
-// acc[r * kp + e] = sum over positions j in [a, a + n) of x_r[j] * c[e][j] for `rows` (<= 4)
-// vectors sharing the range (rows past `rows` repeat the first; their sums are not read).
-PNB_AVX2_CLONES void dot_range(const float* const* x, std::size_t rows, std::uint32_t a, std::uint32_t n,
-                               const float* transposed, std::uint32_t kp, float* acc) {
+// For `rows` (<= 4) vectors sharing the range [a, a + n): each one's nearest entry over that
+// range (the first lowest |c|^2 - 2 x.c, from norms over the range; none under +inf: 0).
+PNB_AVX2_CLONES void nearest_over_range(const float* const* x, std::size_t rows, std::uint32_t a, std::uint32_t n,
+                                        const float* transposed, const float* norms, std::uint32_t kp, float* acc,
+                                        std::uint32_t* best) {
   const float* row_x[kDotRows];
   for (std::size_t r = 0; r < kDotRows; ++r) row_x[r] = x[r < rows ? r : 0];
-  dot_rows(row_x, a, n, transposed, kp, acc);
+  dot_rows(row_x, a, n, transposed, kp, acc, norms);
+  for (std::size_t r = 0; r < rows; ++r)
+    best[r] = first_lowest(acc + r * kp, kp, std::numeric_limits<float>::infinity());
 }
 
 double assign_all(const PartialVectors& set, const std::vector<float>& codebook, std::uint32_t k,
@@ -116,16 +119,11 @@ void PartialNearest::nearest(const PartialVectors& set, std::size_t first, std::
     while (rows < 4 && at + rows < count && set.offsets[first + order[at + rows]] == a) ++rows;
     const float* x[4];
     for (std::size_t r = 0; r < rows; ++r) x[r] = set.values + (first + order[at + r]) * m_dim;
-    dot_range(x, rows, a, m_length, m_transposed.data(), m_kp, acc.data());
-    const float* norms = m_norms.data() + std::size_t(a) * m_kp;
+    std::uint32_t nearest[kDotRows];
+    nearest_over_range(x, rows, a, m_length, m_transposed.data(), m_norms.data() + std::size_t(a) * m_kp, m_kp,
+                       acc.data(), nearest);
     for (std::size_t r = 0; r < rows; ++r) {
-      const float* dot = acc.data() + r * m_kp;
-      std::uint32_t best = 0;
-      float best_score = std::numeric_limits<float>::infinity();
-      for (std::uint32_t e = 0; e < m_k; ++e) {
-        const float score = norms[e] - 2.f * dot[e];
-        if (score < best_score) best_score = score, best = e;
-      }
+      const std::uint32_t best = nearest[r];
       const std::size_t i = order[at + r];
       indices[i] = std::uint8_t(best);
       if (distances) {

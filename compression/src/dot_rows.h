@@ -1,5 +1,5 @@
-// compression/src/dot_rows.h -- dot products of four vectors with every entry of a transposed
-// codebook: the inner loop of the nearest-entry searches (private).
+// compression/src/dot_rows.h -- the inner loops of the nearest-entry searches (private): dot
+// products of four vectors with every entry of a transposed codebook, and the lowest score.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +10,7 @@ namespace penumbra::compression::detail {
 constexpr std::size_t kDotRows = 4;
 
 using Lanes8 = float __attribute__((vector_size(32), aligned(4)));  // unaligned loads and stores
+using Indices8 = std::int32_t __attribute__((vector_size(32)));
 
 /// dot_rows for entries [e0, e0 + 8 kVectors).
 template <std::size_t kVectors>
@@ -47,6 +48,27 @@ inline __attribute__((always_inline)) void dot_rows(const float* const* x, std::
   std::uint32_t e0 = 0;
   for (; e0 + 16 <= kp; e0 += 16) dot_tile<2>(x, a, n, transposed, kp, e0, acc, norms);
   if (e0 < kp) dot_tile<1>(x, a, n, transposed, kp, e0, acc, norms);
+}
+
+/// The entry the scan "best = 0, least = start; for each e, if s[e] < least then best = e, least =
+/// s[e]" picks over kp scores (a multiple of 8): the lowest score under `start`, the first of
+/// equal ones; a NaN score never wins, and 0 when none is under `start`. Each vector lane keeps
+/// the first lowest of its entries, then the lanes are compared; the scalar scan, a compare and a
+/// branch per entry, cost as much as the dot products. Inlined as dot_rows is.
+inline __attribute__((always_inline)) std::uint32_t first_lowest(const float* s, std::uint32_t kp, float start) {
+  Lanes8 low = {start, start, start, start, start, start, start, start};
+  Indices8 at = {}, entry = {0, 1, 2, 3, 4, 5, 6, 7};
+  for (std::uint32_t e = 0; e < kp; e += 8, entry += 8) {
+    const Lanes8 v = *reinterpret_cast<const Lanes8*>(s + e);
+    const auto lower = v < low;
+    low = lower ? v : low;
+    at = lower ? entry : at;
+  }
+  float least = low[0];
+  std::int32_t best = at[0];
+  for (int l = 1; l < 8; ++l)
+    if (low[l] < least || (low[l] == least && at[l] < best)) least = low[l], best = at[l];
+  return std::uint32_t(best);
 }
 
 }  // namespace penumbra::compression::detail

@@ -28,28 +28,10 @@ PNB_AVX2_CLONES void score_rows(const float* x, std::size_t rows, std::uint32_t 
   detail::dot_rows(row_x, 0, dim, transposed, kp, acc, norms);
 }
 
-// The entry a scan "best = 0; for each e, if s[e] < s[best] then best = e" picks over kp scores
-// (a multiple of 8; padding entries score +inf, so never win): the lowest score, the first of
-// equal ones, NaN scores never replacing a number. Each vector lane keeps the first lowest of
-// its entries, then the lanes' results are compared; the scan, a compare and a branch per entry,
-// cost as much as the scoring's sums.
-using detail::Lanes8;
-using Indices8 = std::int32_t __attribute__((vector_size(32)));
+// The entry a scan from best = 0 picks: the first lowest score, a NaN never replacing a number
+// (padding entries score +inf, so never win).
 PNB_AVX2_CLONES std::uint32_t lowest_score(const float* s, std::uint32_t kp) {
-  if (std::isnan(s[0])) return 0;
-  Lanes8 low = {s[0], s[0], s[0], s[0], s[0], s[0], s[0], s[0]};
-  Indices8 at = {}, entry = {0, 1, 2, 3, 4, 5, 6, 7};
-  for (std::uint32_t e = 0; e < kp; e += 8, entry += 8) {
-    const Lanes8 v = *reinterpret_cast<const Lanes8*>(s + e);
-    const auto lower = v < low;
-    low = lower ? v : low;
-    at = lower ? entry : at;
-  }
-  float best_score = low[0];
-  std::int32_t best = at[0];
-  for (int l = 1; l < 8; ++l)
-    if (low[l] < best_score || (low[l] == best_score && at[l] < best)) best_score = low[l], best = at[l];
-  return std::uint32_t(best);
+  return std::isnan(s[0]) ? 0 : detail::first_lowest(s, kp, s[0]);
 }
 
 }  // namespace
