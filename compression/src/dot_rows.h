@@ -9,8 +9,15 @@ namespace penumbra::compression::detail {
 /// Vectors whose dot products one call computes, sharing each load of a codebook row.
 constexpr std::size_t kDotRows = 4;
 
-using Lanes8 = float __attribute__((vector_size(32), aligned(4)));  // unaligned loads and stores
+using Lanes8 = float __attribute__((vector_size(32)));
 using Indices8 = std::int32_t __attribute__((vector_size(32)));
+
+/// 8 floats from or to any address. Through memcpy, which both compilers turn into one unaligned
+/// move: clang 14 ignores a reduced alignment on a vector type and emitted aligned moves through
+/// such pointers, which fault on the codebooks' 4-byte-aligned rows.
+/// (By reference: a 32-byte vector passed or returned by value changes the ABI with AVX.)
+inline __attribute__((always_inline)) void load8(Lanes8& v, const float* p) { __builtin_memcpy(&v, p, sizeof v); }
+inline __attribute__((always_inline)) void store8(float* p, const Lanes8& v) { __builtin_memcpy(p, &v, sizeof v); }
 
 /// dot_rows for entries [e0, e0 + 8 kVectors).
 template <std::size_t kVectors>
@@ -21,7 +28,7 @@ inline __attribute__((always_inline)) void dot_tile(const float* const* x, std::
   for (std::uint32_t j = a; j < a + n; ++j) {
     Lanes8 c[kVectors];
     for (std::size_t v = 0; v < kVectors; ++v)
-      c[v] = *reinterpret_cast<const Lanes8*>(transposed + std::size_t(j) * kp + e0 + 8 * v);
+      load8(c[v], transposed + std::size_t(j) * kp + e0 + 8 * v);
     for (std::size_t r = 0; r < kDotRows; ++r) {
       const float xr = x[r][j];
       for (std::size_t v = 0; v < kVectors; ++v) sums[r][v] += xr * c[v];
@@ -29,8 +36,13 @@ inline __attribute__((always_inline)) void dot_tile(const float* const* x, std::
   }
   for (std::size_t r = 0; r < kDotRows; ++r)
     for (std::size_t v = 0; v < kVectors; ++v) {
-      Lanes8& out = *reinterpret_cast<Lanes8*>(acc + r * kp + e0 + 8 * v);
-      out = norms ? *reinterpret_cast<const Lanes8*>(norms + e0 + 8 * v) - 2.f * sums[r][v] : sums[r][v];
+      Lanes8 out = sums[r][v];
+      if (norms) {
+        Lanes8 n;
+        load8(n, norms + e0 + 8 * v);
+        out = n - 2.f * out;
+      }
+      store8(acc + r * kp + e0 + 8 * v, out);
     }
 }
 
@@ -59,7 +71,8 @@ inline __attribute__((always_inline)) std::uint32_t first_lowest(const float* s,
   Lanes8 low = {start, start, start, start, start, start, start, start};
   Indices8 at = {}, entry = {0, 1, 2, 3, 4, 5, 6, 7};
   for (std::uint32_t e = 0; e < kp; e += 8, entry += 8) {
-    const Lanes8 v = *reinterpret_cast<const Lanes8*>(s + e);
+    Lanes8 v;
+    load8(v, s + e);
     const auto lower = v < low;
     low = lower ? v : low;
     at = lower ? entry : at;
