@@ -13,7 +13,7 @@ using Lanes8 = float __attribute__((vector_size(32)));
 using Indices8 = std::int32_t __attribute__((vector_size(32)));
 
 /// 8 floats from or to any address. Through memcpy, which both compilers turn into one unaligned
-/// move: clang 14 ignores a reduced alignment on a vector type and emitted aligned moves through
+/// move: clang 14 ignores a reduced alignment on a vector type and emits aligned moves through
 /// such pointers, which fault on the codebooks' 4-byte-aligned rows.
 /// (By reference: a 32-byte vector passed or returned by value changes the ABI with AVX.)
 inline __attribute__((always_inline)) void load8(Lanes8& v, const float* p) { __builtin_memcpy(&v, p, sizeof v); }
