@@ -15,7 +15,7 @@ namespace penumbra::compression::detail {
 
 namespace {
 
-// For `rows` (<= 4) vectors sharing the range [a, a + n): each one's nearest entry over that
+// For `rows` (<= kDotRows) vectors sharing the range [a, a + n): each one's nearest entry over that
 // range (the first lowest |c|^2 - 2 x.c, from norms over the range; none under +inf: 0).
 PNB_AVX2_CLONES void nearest_over_range(const float* const* x, std::size_t rows, std::uint32_t a, std::uint32_t n,
                                         const float* transposed, const float* norms, std::uint32_t kp, float* acc,
@@ -82,7 +82,7 @@ double lloyd(const PartialVectors& set, std::uint32_t k, std::vector<float>& cod
 }  // namespace
 
 PartialNearest::PartialNearest(const float* codebook, std::uint32_t k, std::uint32_t dim, std::uint32_t length)
-    : m_k(k), m_dim(dim), m_length(length), m_kp((k + 7) / 8 * 8) {
+    : m_dim(dim), m_length(length), m_kp((k + 7) / 8 * 8) {
   require(k >= 1 && k <= 256 && length >= 1 && length <= dim, "PartialNearest: bad codebook or length");
   m_codebook.assign(codebook, codebook + std::size_t(k) * dim);
   m_transposed.assign(std::size_t(dim) * m_kp, 0.f);
@@ -112,12 +112,12 @@ void PartialNearest::nearest(const PartialVectors& set, std::size_t first, std::
   std::stable_sort(order.begin(), order.end(), [&](std::uint32_t p, std::uint32_t q) {
     return set.offsets[first + p] < set.offsets[first + q];
   });
-  std::vector<float> acc(4 * std::size_t(m_kp));
+  std::vector<float> acc(kDotRows * std::size_t(m_kp));
   for (std::size_t at = 0; at < count;) {
     const std::uint32_t a = set.offsets[first + order[at]];
     std::size_t rows = 1;
-    while (rows < 4 && at + rows < count && set.offsets[first + order[at + rows]] == a) ++rows;
-    const float* x[4];
+    while (rows < kDotRows && at + rows < count && set.offsets[first + order[at + rows]] == a) ++rows;
+    const float* x[kDotRows];
     for (std::size_t r = 0; r < rows; ++r) x[r] = set.values + (first + order[at + r]) * m_dim;
     std::uint32_t nearest[kDotRows];
     nearest_over_range(x, rows, a, m_length, m_transposed.data(), m_norms.data() + std::size_t(a) * m_kp, m_kp,

@@ -32,7 +32,7 @@ public:
                float* distances = nullptr) const;
 
 private:
-  std::uint32_t m_k, m_dim, m_length, m_kp;
+  std::uint32_t m_dim, m_length, m_kp;  // kp: entries padded to a multiple of 8 (padding: +inf)
   std::vector<float> m_codebook;    // k x dim
   std::vector<float> m_transposed;  // dim x kp
   std::vector<float> m_norms;       // (dim - length + 1) x kp: |entry|^2 over each range
