@@ -2,6 +2,7 @@
 #include "vq_lanes.h"
 
 #include <algorithm>
+#include <vector>
 
 #include "lane_blocks.h"
 #include "lane_ops.h"
@@ -196,11 +197,80 @@ __attribute__((target("avx512f"), always_inline)) inline void steps16(const floa
   for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride, _mm512_add_ps(bj, c[k]));
 }
 
+// Rows of a window rarely start on a cache line (a row is vertex_count floats), and a 64-byte
+// store across two lines cost a third more time than one within a line on mug's page, held in
+// cache. So each row's stores cover exactly one line: lane l of the store at vertex j - m is the
+// previous group's lane 16 - m + l while l < m, else this group's lane l - m, where m is how far
+// the row's vertex j sits into its line. A row's first and last lines are masked stores.
+struct LineAlignedRow {
+  float* line;   // where the group at vertex j stores: the row at vertex j - m
+  __m512i pick;  // 16 - m + l: the two-source permute that joins two groups
+  unsigned m;    // floats from the line's start to vertex j
+};
+
+__attribute__((target("avx512f"), always_inline)) inline LineAlignedRow line_aligned_row(float* row) {
+  const std::uintptr_t at = reinterpret_cast<std::uintptr_t>(row);
+  const unsigned m = unsigned(at / sizeof(float)) & 15u;
+  return {reinterpret_cast<float*>(at - m * sizeof(float)),
+          _mm512_add_epi32(_mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                           _mm512_set1_epi32(int(16 - m))),
+          m};
+}
+
+// Steps t .. t + K - 1 of a run's 16-vertex groups [0, groups * 16): each vertex's mean plus its
+// D8 value (gathered from `d8`, the column of D8 block t / block, at row8), plus its D_W values
+// (rows `row` of `table`, the D_W codebook at step t); output rows stride apart from `at` (the
+// run's first vertex at step t). One transpose per group; its K sums are joined with the previous
+// group's into line-aligned stores. The last group's sums wait in `carry` (16 floats a row) for
+// the next run's first store; the first run of a call masks its first lines, and the last run
+// with whole groups stores the last, partial ones.
+template <int K>
+__attribute__((target("avx512f"), always_inline)) inline void steps16_run(const float* table, const std::int32_t* row,
+                                                                          const float* mean, const float* d8,
+                                                                          const std::int32_t* row8, float* at,
+                                                                          std::uint64_t stride, std::uint64_t groups,
+                                                                          float* carry, bool first, bool last) {
+  LineAlignedRow r[K];
+  for (int k = 0; k < K; ++k) r[k] = line_aligned_row(at + std::uint64_t(k) * stride);
+  __m512 prev[K];
+  {
+    __m512 c[8];
+    rows_transposed16(table, row, c);
+    const __m512 bj = _mm512_add_ps(_mm512_load_ps(mean), _mm512_i32gather_ps(_mm512_load_si512(row8), d8, 4));
+    for (int k = 0; k < K; ++k) {
+      prev[k] = _mm512_add_ps(bj, c[k]);
+      if (first)
+        _mm512_mask_storeu_ps(r[k].line, __mmask16(0xFFFFu << r[k].m), _mm512_permutex2var_ps(prev[k], r[k].pick, prev[k]));
+      else
+        _mm512_storeu_ps(r[k].line, _mm512_permutex2var_ps(_mm512_load_ps(carry + 16 * k), r[k].pick, prev[k]));
+    }
+  }
+  for (std::uint64_t g = 1; g < groups; ++g) {
+    __m512 c[8];
+    rows_transposed16(table, row + 16 * g, c);
+    const __m512 bj = _mm512_add_ps(_mm512_load_ps(mean + 16 * g),
+                                    _mm512_i32gather_ps(_mm512_load_si512(row8 + 16 * g), d8, 4));
+    for (int k = 0; k < K; ++k) {
+      const __m512 sum = _mm512_add_ps(bj, c[k]);
+      _mm512_storeu_ps(r[k].line + 16 * g, _mm512_permutex2var_ps(prev[k], r[k].pick, sum));
+      prev[k] = sum;
+    }
+  }
+  if (last) {
+    for (int k = 0; k < K; ++k)
+      _mm512_mask_storeu_ps(r[k].line + 16 * groups, __mmask16((1u << r[k].m) - 1u),
+                            _mm512_permutex2var_ps(prev[k], r[k].pick, prev[k]));
+  } else {
+    for (int k = 0; k < K; ++k) _mm512_store_ps(carry + 16 * k, prev[k]);
+  }
+}
+
 // vq_window_lanes<false> with 16 vertices at a time: each vertex's D8 row and its runs of eight
 // D_W values are still one read each, rows l and l + 8 of a group share a register, and one
-// transpose, eight adds and eight stores serve 16 vertices where the AVX2 form needs two of each.
-// Only the D8 blocks the page's steps reach are kept (3 of 8 on a 21-step page of a 64-step
-// window). A run's last 8 vertices, if it has an odd number of eights, take the AVX2 form.
+// transpose, eight adds and eight line-aligned stores serve 16 vertices where the AVX2 form needs
+// two transposes and sixteen stores, most across two lines. Only the D8 blocks the page's steps
+// reach are kept (3 of 8 on a 21-step page of a 64-step window). Runs hold a multiple of 16
+// vertices but the last; its last 8, if it has an odd number of eights, take the AVX2 form.
 __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale, const std::uint16_t* mean_q,
                                                            const float* c8, const std::uint8_t* i8, const float* cw,
                                                            std::uint32_t window, const std::uint8_t* iw,
@@ -210,26 +280,46 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   const __m512 l16 = _mm512_set1_ps(lo), s16 = _mm512_set1_ps(scale);
   const std::uint32_t block = window / 8, blocks = (steps + block - 1) / block;
-  alignas(64) float base[8 * kRun];
+  alignas(64) float base[8 * kRun], mean[kRun];
   alignas(64) std::int32_t row8[kRun], roww[kRun];
+  // A row's carry between runs: on the stack for windows up to 64 steps.
+  constexpr std::uint32_t kStackRows = 64;
+  alignas(64) float carry_stack[kStackRows * 16];
+  std::vector<float> carry_heap;
+  float* carry = carry_stack;
+  if (steps > kStackRows) {
+    carry_heap.resize(std::uint64_t(steps + 7) / 8 * 8 * 16 + 16);
+    carry = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(carry_heap.data()) + 63) & ~std::uintptr_t(63));
+  }
   for (std::uint64_t r0 = 0; r0 < count; r0 += kRun) {
     const std::uint64_t run = std::min(kRun, count - r0);  // a multiple of 8
     run_rows(i8 + r0, iw + r0, window, run, row8, roww);
-    std::uint64_t j = 0;
-    for (; j + 2 * kLanes <= run; j += 2 * kLanes) {
-      __m512 d8[8];
-      rows_transposed16(c8, row8 + j, d8);
+    const std::uint64_t groups = run / (2 * kLanes);
+    for (std::uint64_t j = 0; j < groups * 2 * kLanes; j += 2 * kLanes) {
       const __m512i q = _mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(mean_q + r0 + j)));
-      const __m512 mean = _mm512_add_ps(l16, _mm512_mul_ps(_mm512_cvtepi32_ps(q), s16));
-      for (std::uint32_t k = 0; k < blocks; ++k) _mm512_store_ps(base + std::uint64_t(k) * kRun + j, _mm512_add_ps(mean, d8[k]));
+      _mm512_store_ps(mean + j, _mm512_add_ps(l16, _mm512_mul_ps(_mm512_cvtepi32_ps(q), s16)));
     }
-    for (; j < run; j += kLanes) means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
+    for (std::uint64_t j = groups * 2 * kLanes; j < run; j += kLanes)
+      means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
+    // The last run may end with 8 vertices for the AVX2 form, or be only those 8.
+    const bool first = r0 == 0, last = r0 + run + 2 * kLanes > count;
     for (std::uint32_t t = 0; t < steps; t += 8) {
       const float* b = base + std::uint64_t(t / block) * kRun;
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
-      for (j = 0; j + 2 * kLanes <= run; j += 2 * kLanes) steps16(cw + t, roww + j, b + j, at + j, stride, k_end);
-      for (; j < run; j += kLanes) steps8<false>(cw + t, roww + j, b + j, at + j, stride, t, k_end, nullptr, r0 + j);
+      float* carry_t = carry + std::uint64_t(t) * 16;
+      if (groups) switch (k_end) {
+        case 1: steps16_run<1>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 2: steps16_run<2>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 3: steps16_run<3>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 4: steps16_run<4>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 5: steps16_run<5>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 6: steps16_run<6>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        case 7: steps16_run<7>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+        default: steps16_run<8>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
+      }
+      for (std::uint64_t j = groups * 2 * kLanes; j < run; j += kLanes)
+        steps8<false>(cw + t, roww + j, b + j, at + j, stride, t, k_end, nullptr, r0 + j);
     }
   }
 }

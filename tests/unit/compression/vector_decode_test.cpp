@@ -203,6 +203,42 @@ TEST(VectorDecode, LanesGiveTheScalarBitsOnVqAndAlignedPages) {
   expect_lanes_match_scalar(partial_front, "aligned VQ, 45 of 64 steps");
 }
 
+TEST(VectorDecode, PlainVqWindowsWriteOnlyTheirRowsWhereverTheyStart) {
+  // The AVX-512 window decoder joins neighbouring groups of 16 vertices into stores that each
+  // cover one cache line of a row, masking a row's first and last lines. Every start of the output
+  // within a line, and vertex counts that end a run of 256 with 8 vertices, with 16, or leave
+  // fewer than 16 in all, give the scalar bits and write nothing outside the rows.
+  VectorDecodeGuard guard;
+  const CodecParams plain = testing::small_plain_codebooks();
+  for (const std::uint64_t N : {8ull, 13ull, 16ull, 40ull, 264ull, 272ull, 530ull, 777ull}) {
+    for (const std::uint32_t steps : {21u, 64u}) {
+      const auto page = testing::shared_page(testing::oscillating_sources(N, 64), steps, plain, 0.0f);
+      ASSERT_EQ(page->method, PageMethod::vq);
+      std::vector<float> scalar(N * steps);
+      set_vector_decode(false);
+      decode_window(*page, scalar.data());
+      set_vector_decode(true);
+      constexpr std::uint32_t kGuard = 32;  // floats of canary on each side
+      std::vector<float> buffer(N * steps + 2 * kGuard + 16);
+      const float canary = -12345.5f;
+      for (std::uint32_t offset = 0; offset < 16; ++offset) {
+        // Offsets within a 64-byte line, counted from the first line-aligned float.
+        float* line0 = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(buffer.data()) + 63) & ~std::uintptr_t(63));
+        float* out = line0 + kGuard / 2 + offset;
+        ASSERT_LE(out + N * steps + kGuard / 2, buffer.data() + buffer.size());
+        std::fill(buffer.begin(), buffer.end(), canary);
+        decode_window(*page, out);
+        const std::string what = "N " + std::to_string(N) + ", " + std::to_string(steps) + " steps, offset " +
+                                 std::to_string(offset);
+        ASSERT_EQ(0, std::memcmp(out, scalar.data(), scalar.size() * 4)) << what;
+        for (float* f = buffer.data(); f < out; ++f) ASSERT_EQ(*f, canary) << what << ": before the rows";
+        for (float* f = out + N * steps; f < buffer.data() + buffer.size(); ++f)
+          ASSERT_EQ(*f, canary) << what << ": after the rows";
+      }
+    }
+  }
+}
+
 TEST(VectorDecode, CanBeTurnedOffAndOn) {
   VectorDecodeGuard guard;
   set_vector_decode(false);
