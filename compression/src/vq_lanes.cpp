@@ -223,8 +223,10 @@ __attribute__((target("avx512f"), always_inline)) inline LineAlignedRow line_ali
 // run's first vertex at step t). One transpose per group; its K sums are joined with the previous
 // group's into line-aligned stores. The last group's sums wait in `carry` (16 floats a row) for
 // the next run's first store; the first run of a call masks its first lines, and the last run
-// with whole groups stores the last, partial ones.
-template <int K>
+// with whole groups stores the last, partial ones. Without kJoin every row starts on a line
+// (m = 0: an aligned output and a vertex count that is a multiple of 16), and the sums are
+// stored as they are.
+template <int K, bool kJoin>
 __attribute__((target("avx512f"), always_inline)) inline void steps16_run(const float* table, const std::int32_t* row,
                                                                           const float* mean, const float* d8,
                                                                           const std::int32_t* row8, float* at,
@@ -239,7 +241,9 @@ __attribute__((target("avx512f"), always_inline)) inline void steps16_run(const 
     const __m512 bj = _mm512_add_ps(_mm512_load_ps(mean), _mm512_i32gather_ps(_mm512_load_si512(row8), d8, 4));
     for (int k = 0; k < K; ++k) {
       prev[k] = _mm512_add_ps(bj, c[k]);
-      if (first)
+      if (!kJoin)
+        _mm512_store_ps(r[k].line, prev[k]);
+      else if (first)
         _mm512_mask_storeu_ps(r[k].line, __mmask16(0xFFFFu << r[k].m), _mm512_permutex2var_ps(prev[k], r[k].pick, prev[k]));
       else
         _mm512_storeu_ps(r[k].line, _mm512_permutex2var_ps(_mm512_load_ps(carry + 16 * k), r[k].pick, prev[k]));
@@ -252,16 +256,36 @@ __attribute__((target("avx512f"), always_inline)) inline void steps16_run(const 
                                     _mm512_i32gather_ps(_mm512_load_si512(row8 + 16 * g), d8, 4));
     for (int k = 0; k < K; ++k) {
       const __m512 sum = _mm512_add_ps(bj, c[k]);
-      _mm512_storeu_ps(r[k].line + 16 * g, _mm512_permutex2var_ps(prev[k], r[k].pick, sum));
+      _mm512_store_ps(r[k].line + 16 * g, kJoin ? _mm512_permutex2var_ps(prev[k], r[k].pick, sum) : sum);
       prev[k] = sum;
     }
   }
+  if (!kJoin) return;
   if (last) {
     for (int k = 0; k < K; ++k)
       _mm512_mask_storeu_ps(r[k].line + 16 * groups, __mmask16((1u << r[k].m) - 1u),
                             _mm512_permutex2var_ps(prev[k], r[k].pick, prev[k]));
   } else {
     for (int k = 0; k < K; ++k) _mm512_store_ps(carry + 16 * k, prev[k]);
+  }
+}
+
+template <bool kJoin>
+__attribute__((target("avx512f"), always_inline)) inline void steps16_runs(std::uint32_t k, const float* table,
+                                                                           const std::int32_t* row, const float* mean,
+                                                                           const float* d8, const std::int32_t* row8,
+                                                                           float* at, std::uint64_t stride,
+                                                                           std::uint64_t groups, float* carry,
+                                                                           bool first, bool last) {
+  switch (k) {
+    case 1: return steps16_run<1, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 2: return steps16_run<2, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 3: return steps16_run<3, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 4: return steps16_run<4, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 5: return steps16_run<5, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 6: return steps16_run<6, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    case 7: return steps16_run<7, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
+    default: return steps16_run<8, kJoin>(table, row, mean, d8, row8, at, stride, groups, carry, first, last);
   }
 }
 
@@ -280,6 +304,8 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
   const __m256 l = _mm256_set1_ps(lo), s = _mm256_set1_ps(scale);
   const __m512 l16 = _mm512_set1_ps(lo), s16 = _mm512_set1_ps(scale);
   const std::uint32_t block = window / 8, blocks = (steps + block - 1) / block;
+  // Rows to join: any that does not start on a line.
+  const bool join = ((reinterpret_cast<std::uintptr_t>(out) / sizeof(float)) | stride) % 16 != 0;
   alignas(64) float base[8 * kRun], mean[kRun];
   alignas(64) std::int32_t row8[kRun], roww[kRun];
   // A row's carry between runs: on the stack for windows up to 64 steps.
@@ -308,16 +334,10 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
       float* carry_t = carry + std::uint64_t(t) * 16;
-      if (groups) switch (k_end) {
-        case 1: steps16_run<1>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 2: steps16_run<2>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 3: steps16_run<3>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 4: steps16_run<4>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 5: steps16_run<5>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 6: steps16_run<6>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        case 7: steps16_run<7>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-        default: steps16_run<8>(cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last); break;
-      }
+      if (groups && join)
+        steps16_runs<true>(k_end, cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last);
+      else if (groups)
+        steps16_runs<false>(k_end, cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last);
       for (std::uint64_t j = groups * 2 * kLanes; j < run; j += kLanes)
         steps8<false>(cw + t, roww + j, b + j, at + j, stride, t, k_end, nullptr, r0 + j);
     }
