@@ -187,16 +187,6 @@ __attribute__((target("avx512f"), always_inline)) inline void rows_transposed16(
   transpose16x8(r, c);
 }
 
-// The 16-vertex form of steps8 without a residual (rows l and l + 8 share a register).
-__attribute__((target("avx512f"), always_inline)) inline void steps16(const float* table, const std::int32_t* row,
-                                                                      const float* b, float* at, std::uint64_t stride,
-                                                                      std::uint32_t k_end) {
-  __m512 c[8];
-  rows_transposed16(table, row, c);
-  const __m512 bj = _mm512_load_ps(b);
-  for (std::uint32_t k = 0; k < k_end; ++k) _mm512_storeu_ps(at + std::uint64_t(k) * stride, _mm512_add_ps(bj, c[k]));
-}
-
 // Rows of a window rarely start on a cache line (a row is vertex_count floats), and a 64-byte
 // store across two lines cost a third more time than one within a line on mug's page, held in
 // cache. So each row's stores cover exactly one line: lane l of the store at vertex j - m is the
