@@ -279,12 +279,12 @@ __attribute__((target("avx512f"), always_inline)) inline void steps16_runs(std::
   }
 }
 
-// vq_window_lanes<false> with 16 vertices at a time: each vertex's D8 row and its runs of eight
-// D_W values are still one read each, rows l and l + 8 of a group share a register, and one
-// transpose, eight adds and eight line-aligned stores serve 16 vertices where the AVX2 form needs
-// two transposes and sixteen stores, most across two lines. Only the D8 blocks the page's steps
-// reach are kept (3 of 8 on a 21-step page of a 64-step window). Runs hold a multiple of 16
-// vertices but the last; its last 8, if it has an odd number of eights, take the AVX2 form.
+// vq_window_lanes<false> with 16 vertices at a time: each vertex's runs of eight D_W values are
+// still one read each, rows l and l + 8 of a group share a register, and one transpose, eight
+// adds and eight line-aligned stores serve 16 vertices where the AVX2 form needs two transposes
+// and sixteen stores, most across two lines; mean + D8 is gathered per group and block of steps.
+// Runs hold a multiple of 16 vertices but the last; its last 8, if it has an odd number of eights,
+// take the AVX2 form, with a table of mean + D8 for the blocks the page's steps reach.
 __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale, const std::uint16_t* mean_q,
                                                            const float* c8, const std::uint8_t* i8, const float* cw,
                                                            std::uint32_t window, const std::uint8_t* iw,
@@ -296,7 +296,7 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
   const std::uint32_t block = window / 8, blocks = (steps + block - 1) / block;
   // Rows to join: any that does not start on a line.
   const bool join = ((reinterpret_cast<std::uintptr_t>(out) / sizeof(float)) | stride) % 16 != 0;
-  alignas(64) float base[8 * kRun], mean[kRun];
+  alignas(64) float mean[kRun], tail_base[8 * kLanes];
   alignas(64) std::int32_t row8[kRun], roww[kRun];
   // A row's carry between runs: on the stack for windows up to 64 steps.
   constexpr std::uint32_t kStackRows = 64;
@@ -315,12 +315,11 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
       const __m512i q = _mm512_cvtepu16_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(mean_q + r0 + j)));
       _mm512_store_ps(mean + j, _mm512_add_ps(l16, _mm512_mul_ps(_mm512_cvtepi32_ps(q), s16)));
     }
-    for (std::uint64_t j = groups * 2 * kLanes; j < run; j += kLanes)
-      means_plus_d8(l, s, mean_q + r0 + j, c8, row8 + j, blocks, base + j, kRun);
+    const std::uint64_t tail = groups * 2 * kLanes;  // the run's last 8 vertices, if tail < run
+    if (tail < run) means_plus_d8(l, s, mean_q + r0 + tail, c8, row8 + tail, blocks, tail_base, kLanes);
     // The last run may end with 8 vertices for the AVX2 form, or be only those 8.
     const bool first = r0 == 0, last = r0 + run + 2 * kLanes > count;
     for (std::uint32_t t = 0; t < steps; t += 8) {
-      const float* b = base + std::uint64_t(t / block) * kRun;
       const std::uint32_t k_end = std::min<std::uint32_t>(8, steps - t);
       float* at = out + std::uint64_t(t) * stride + r0;
       float* carry_t = carry + std::uint64_t(t) * 16;
@@ -328,8 +327,9 @@ __attribute__((target("avx512f"))) void vq_window_lanes512(float lo, float scale
         steps16_runs<true>(k_end, cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last);
       else if (groups)
         steps16_runs<false>(k_end, cw + t, roww, mean, c8 + t / block, row8, at, stride, groups, carry_t, first, last);
-      for (std::uint64_t j = groups * 2 * kLanes; j < run; j += kLanes)
-        steps8<false>(cw + t, roww + j, b + j, at + j, stride, t, k_end, nullptr, r0 + j);
+      if (tail < run)
+        steps8<false>(cw + t, roww + tail, tail_base + std::uint64_t(t / block) * kLanes, at + tail, stride, t, k_end,
+                      nullptr, r0 + tail);
     }
   }
 }
