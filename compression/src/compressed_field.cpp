@@ -246,7 +246,7 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index,
   if (!page || page.use_count() != 1) page = std::make_shared<EncodedPage>();
   try {
     detail::parse_page_payload(h, payload, m_info.vertex_count, m_info.window, m_info.codebook_size, name, m_version,
-                               *page);
+                               *page, buffers.payload);
   } catch (...) {
     buffers.spare = std::move(page);  // its memory still serves the next load
     throw;

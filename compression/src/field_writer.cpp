@@ -9,6 +9,7 @@
 #include "byte_io.h"
 #include "crc32.h"
 #include "file_layout.h"
+#include "page_coding.h"
 #include "page_format.h"
 #include "page_methods.h"
 #include "penumbra/compression/field_file.h"
@@ -75,9 +76,11 @@ std::vector<std::uint8_t> serialize_tail(std::uint64_t index_offset, std::uint64
 
 }  // namespace detail
 
-FieldWriter::FieldWriter(const std::string& path, const FieldInfo& info)
-    : m_path(path), m_partial(path + ".partial"), m_info(info) {
+FieldWriter::FieldWriter(const std::string& path, const FieldInfo& info, int entropy_level)
+    : m_path(path), m_partial(path + ".partial"), m_info(info), m_entropy_level(entropy_level) {
   require(!path.empty(), "FieldWriter: empty path");
+  require(entropy_level >= 0 && entropy_level <= detail::kMaxEntropyLevel,
+          "FieldWriter: entropy_level must be 0..19, got " + std::to_string(entropy_level));
   require(info.vertex_count >= 1, "FieldWriter: vertex_count must be positive");
   require(detail::valid_window(info.window),
           "FieldWriter: window must be a multiple of 8 in [8, 1024], got " + std::to_string(info.window));
@@ -111,7 +114,8 @@ void FieldWriter::write_page(const EncodedPage& page) {
                                                   std::to_string(page.first_step) + ", expected " +
                                                   std::to_string(m_times.size()));
   validate_page(page);  // a page the reader would reject is not written
-  const auto bytes = detail::serialize_page(page, std::uint32_t(m_pages.size()));
+  const auto bytes =
+      detail::serialize_page(page, std::uint32_t(m_pages.size()), kContainerFormatVersion, m_entropy_level);
   PageEntry entry{m_offset, bytes.size(), page.first_step, page.step_count, page.method,
                   page.value_min, page.value_max, page.bound};
   write_bytes(bytes.data(), bytes.size());

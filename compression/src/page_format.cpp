@@ -9,6 +9,7 @@
 #include "crc32.h"
 #include "lane_blocks.h"
 #include "page_checks.h"
+#include "page_coding.h"
 #include "page_methods.h"
 #include "penumbra/core/error.h"
 #include "predictive_layout.h"
@@ -153,6 +154,16 @@ void reset_keeping_memory(EncodedPage& page) {
 
 }  // namespace
 
+namespace {
+
+// More than the payload of any valid page of N vertices, n steps and codebooks of K entries can
+// take (every value stored as a raw float, twice over): what a compressed payload may declare.
+std::uint64_t max_payload_bytes(std::uint64_t N, std::uint32_t W, std::uint32_t K, std::uint32_t n) {
+  return 8ull * n + 16ull * K * (2ull * W + 8) + (N + kLaneBlock) * (8ull * n + 64) + 4096;
+}
+
+}  // namespace
+
 std::uint32_t max_method_of_version(std::uint32_t version) {
   // Version 1 knew vq, vq_residual and predictive; version 2 added the shift-aligned methods,
   // version 3 predictive_lanes (versions 4 and 5 changed its layout).
@@ -160,10 +171,13 @@ std::uint32_t max_method_of_version(std::uint32_t version) {
   return version >= 2 ? std::uint32_t(PageMethod::vq_aligned_residual) : std::uint32_t(PageMethod::predictive);
 }
 
-std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t page_index, std::uint32_t format_version) {
+std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t page_index, std::uint32_t format_version,
+                                         int entropy_level) {
   if (std::uint32_t(p.method) > max_method_of_version(format_version) || format_version > std::uint32_t(kContainerFormatVersion))
     throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) + " cannot hold a page of method " +
                                                  std::to_string(std::uint32_t(p.method)));
+  if (entropy_level < 0 || entropy_level > kMaxEntropyLevel)
+    throw Error(ErrorCode::invalid_argument, "entropy level " + std::to_string(entropy_level) + " is outside 0..19");
   std::vector<std::uint8_t> bytes(PageHeader::kBytes, 0);
   ByteWriter w(bytes);
   w.put_array(p.times);
@@ -218,6 +232,11 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
       w.append(rows.data(), words * 4);
     }
   }
+  if (format_version >= kFirstCodedVersion) {
+    std::vector<std::uint8_t> coded(PageHeader::kBytes, 0);
+    append_coded_payload(bytes.data() + PageHeader::kBytes, bytes.size() - PageHeader::kBytes, entropy_level, coded);
+    bytes.swap(coded);
+  }
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();
   auto at = [&](std::size_t offset, const auto& value) { std::memcpy(h + offset, &value, sizeof(value)); };
@@ -261,14 +280,21 @@ bool parse_page_header(const std::uint8_t* h, PageHeader& header) {
 EncodedPage parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
                                std::uint32_t K, const std::string& name, std::uint32_t format_version) {
   EncodedPage p;
-  parse_page_payload(h, payload, N, W, K, name, format_version, p);
+  std::vector<std::uint8_t> scratch;
+  parse_page_payload(h, payload, N, W, K, name, format_version, p, scratch);
   return p;
 }
 
-void parse_page_payload(const PageHeader& h, const std::uint8_t* payload, std::uint64_t N, std::uint32_t W,
-                        std::uint32_t K, const std::string& name, std::uint32_t format_version, EncodedPage& p) {
+void parse_page_payload(const PageHeader& h, const std::uint8_t* stored, std::uint64_t N, std::uint32_t W,
+                        std::uint32_t K, const std::string& name, std::uint32_t format_version, EncodedPage& p,
+                        std::vector<std::uint8_t>& scratch) {
   reset_keeping_memory(p);
-  ByteReader r(payload, h.payload_bytes, name);
+  const std::uint8_t* payload = stored;
+  std::uint64_t bytes = h.payload_bytes;
+  if (format_version >= kFirstCodedVersion)
+    payload = decode_coded_payload(stored, h.payload_bytes, max_payload_bytes(N, W, K, std::min(h.step_count, W)), name,
+                                   scratch, bytes);
+  ByteReader r(payload, bytes, name);
   if (h.method > max_method_of_version(format_version)) r.fail("unknown method " + std::to_string(h.method));
   if (h.step_count < 1 || h.step_count > W) r.fail("step count " + std::to_string(h.step_count) + " outside 1..window");
   p.method = PageMethod(h.method);

@@ -1,6 +1,7 @@
 // compression/src/page_format.h -- one window as one page of bytes, and back (private).
 //
-// Payload, after the 64-byte header, in this order (little-endian):
+// Payload, after the 64-byte header (from version 6 after its coding prefix, page_coding.h), in
+// this order (little-endian):
 //   f64 times[steps]
 //   vq, vq_residual:       f32 mean lo, f32 mean scale, f32 c8[K x 8], f32 cw[K x steps]
 //                          (each entry's first `steps` values), u16 mean[N], u8 i8[N], u8 iw[N]
@@ -43,17 +44,19 @@ std::uint32_t max_method_of_version(std::uint32_t version);
 
 /// Header + payload bytes of a page, as a file of `format_version` holds it. Only this build's
 /// version writes every page; format version 3 holds predictive_lanes pages without a transient
-/// width (built with transient_width off). Throws Error(invalid_argument) for a page the
-/// version cannot hold.
+/// width (built with transient_width off). From version 6 the payload goes through zstd at
+/// `entropy_level` (0: stored as it is). Throws Error(invalid_argument) for a page the version
+/// cannot hold.
 std::vector<std::uint8_t> serialize_page(const EncodedPage& page, std::uint32_t page_index,
-                                         std::uint32_t format_version = kContainerFormatVersion);
+                                         std::uint32_t format_version = kContainerFormatVersion, int entropy_level = 0);
 
 /// Parses and checks a 64-byte header; false if the magic or its checksum is wrong.
 bool parse_page_header(const std::uint8_t* bytes, PageHeader& header);
 
-/// Parses a payload whose checksum was verified; every size and index is checked, so a
-/// malformed payload throws Error(io_error) naming `page_name` instead of reading out of bounds.
-/// `format_version`: the file's, which decides the methods it knows and their layouts.
+/// Parses a payload whose checksum was verified (as stored: from version 6 with its coding
+/// prefix); every size and index is checked, so a malformed payload throws Error(io_error)
+/// naming `page_name` instead of reading out of bounds. `format_version`: the file's, which
+/// decides the methods it knows, their layouts and the coding prefix.
 EncodedPage parse_page_payload(const PageHeader& header, const std::uint8_t* payload, std::uint64_t vertex_count,
                                std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,
                                std::uint32_t format_version);
@@ -61,9 +64,10 @@ EncodedPage parse_page_payload(const PageHeader& header, const std::uint8_t* pay
 /// The same into `page`, whose arrays keep their memory: parsing page after page into one
 /// EncodedPage touches no fresh memory once its arrays are large enough (a first touch costs
 /// about 12 us per 4 KiB on a virtual machine, which held page loads to 90-130 MB/s). What
-/// `page` held before is gone, also when this throws.
+/// `page` held before is gone, also when this throws. A compressed payload is undone into
+/// `scratch`, which keeps its memory the same way.
 void parse_page_payload(const PageHeader& header, const std::uint8_t* payload, std::uint64_t vertex_count,
                         std::uint32_t window, std::uint32_t codebook_size, const std::string& page_name,
-                        std::uint32_t format_version, EncodedPage& page);
+                        std::uint32_t format_version, EncodedPage& page, std::vector<std::uint8_t>& scratch);
 
 }  // namespace penumbra::compression::detail

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "huge_pages.h"
+#include "page_coding.h"
 #include "page_methods.h"
 #include "penumbra/core/error.h"
 
@@ -20,8 +21,9 @@ std::uint64_t StreamingEncoder::required_budget(std::uint64_t n, const CodecPara
   const std::uint64_t sample = std::min<std::uint64_t>(n, c.training_sample);
   std::uint64_t working = n * (8 + 4 + 4 + 2ull * c.window) + sample * c.window * 4 * 2 +
                           std::uint64_t(c.codebook_size) * (c.window + 8) * 4 * 2;
-  // Section offsets of a page with bit blocks (4 bytes per vertex).
-  working += n * 4;
+  // Section offsets of a page with bit blocks (4 bytes per vertex), and the page's bytes once
+  // more while the writer codes them (page_coding.h), as large as its residual bits.
+  working += n * 4 + (c.entropy_level > 0 ? n * 2ull * c.window : 0);
   if (c.aligned && c.window <= detail::kMaxAlignedWindow) {
     // Shift-aligned stage: per vertex shift, level (float, 16-bit, dequantised) and index;
     // the sample's frames of 2W-1 values (all, and the half it trains on); the aligned
@@ -41,6 +43,8 @@ StreamingEncoder::StreamingEncoder(StreamingOptions options) : m_options(std::mo
           "StreamingEncoder: codebook_size must be 2..256, got " + std::to_string(c.codebook_size));
   require(c.bound.kind == BoundKind::none || (std::isfinite(c.bound.value) && c.bound.value > 0),
           "StreamingEncoder: error bound must be positive and finite");
+  require(c.entropy_level >= 0 && c.entropy_level <= detail::kMaxEntropyLevel,
+          "StreamingEncoder: entropy_level must be 0..19, got " + std::to_string(c.entropy_level));
   const std::uint64_t budget = m_options.memory_budget_bytes;
   std::uint32_t buffers = 2;
   if (budget != 0 && budget < required_budget(m_options.vertex_count, c, 2)) {
@@ -64,7 +68,7 @@ StreamingEncoder::StreamingEncoder(StreamingOptions options) : m_options(std::mo
   info.window = c.window;
   info.codebook_size = c.codebook_size;
   info.bound = c.bound;
-  m_writer = std::make_unique<FieldWriter>(m_options.path, info);
+  m_writer = std::make_unique<FieldWriter>(m_options.path, info, c.entropy_level);
   m_thread = std::thread([this] { worker_loop(); });
 }
 

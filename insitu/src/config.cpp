@@ -379,7 +379,8 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
 }
 
 StoreConfig parse_store(const json& j, const std::string& path) {
-  only_keys(j, path, {"directory", "every_cycles", "window", "codebook_size", "error_bound", "memory_budget_mb"});
+  only_keys(j, path,
+            {"directory", "every_cycles", "window", "codebook_size", "error_bound", "entropy_level", "memory_budget_mb"});
   StoreConfig s;
   const json* dir = find(j, "directory");
   if (!dir) fail(child(path, "directory"), "is required");
@@ -403,6 +404,8 @@ StoreConfig parse_store(const json& j, const std::string& path) {
     s.codec.bound.value = number(*(absolute ? find(*b, "absolute") : find(*b, "relative")), vp);
     if (!(s.codec.bound.value > 0)) fail(vp, "must be > 0");
   }
+  if (const json* e = find(j, "entropy_level"))
+    s.codec.entropy_level = static_cast<int>(integer(*e, child(path, "entropy_level"), 0, 19));
   if (const json* m = find(j, "memory_budget_mb"))
     s.memory_budget_bytes = static_cast<std::uint64_t>(integer(*m, child(path, "memory_budget_mb"), 1, 1 << 24)) << 20;
   return s;

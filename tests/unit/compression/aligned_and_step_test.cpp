@@ -13,6 +13,8 @@
 #include "penumbra/core/error.h"
 #include "crc32_reference.h"
 #include "expect_error.h"
+#include "file_layout.h"
+#include "page_format.h"
 #include "stream_field.h"
 #include "temp_path.h"
 #include "test_fields.h"
@@ -149,6 +151,27 @@ std::vector<char> with_version(std::vector<char> bytes, std::uint32_t version) {
   return bytes;
 }
 
+// The field's file as a writer of format `version` wrote it: each page in that version's form
+// (before version 6 without a coding prefix), the same index.
+std::vector<char> written_as_version(const CompressedField& field, std::uint32_t version) {
+  std::vector<std::uint8_t> bytes = detail::serialize_header(field.info());
+  std::vector<PageEntry> entries;
+  for (std::size_t i = 0; i < field.page_count(); ++i) {
+    const auto page = detail::serialize_page(*field.load_page(i), std::uint32_t(i), version);
+    PageEntry e = field.page(i);
+    e.offset = bytes.size();
+    e.bytes = page.size();
+    entries.push_back(e);
+    bytes.insert(bytes.end(), page.begin(), page.end());
+  }
+  const auto index = detail::serialize_index(entries, field.times(), field.value_min(), field.value_max());
+  const std::uint64_t index_offset = bytes.size();
+  bytes.insert(bytes.end(), index.begin(), index.end());
+  const auto tail = detail::serialize_tail(index_offset, bytes.size() + detail::kTailBytes, std::uint32_t(index.size()));
+  bytes.insert(bytes.end(), tail.begin(), tail.end());
+  return with_version(std::vector<char>(bytes.begin(), bytes.end()), version);
+}
+
 CodecParams small_params(ErrorBound bound = {}) {
   CodecParams p;
   p.window = 16;
@@ -221,13 +244,14 @@ TEST(AlignedFile, AShiftOutsideThePageIsRejectedEvenUnderValidChecksums) {
   const auto f = testing::relaxing_front(40, 16);
   CodecParams p = small_params();
   p.codebook_size = 4;
+  p.entropy_level = 0;  // the payload as it is, after its coding prefix
   const std::string path = temp_path("shift.pnbf"), bad = temp_path("shift-bad.pnbf");
   const auto field = write_field(f, path, p);
   ASSERT_EQ(field->page(0).method, PageMethod::vq_aligned);
   auto bytes = testing::read_file(path);
   const std::size_t page = field->page(0).offset, payload = page + 64;
-  // times, 4 floats, codebook (4 x 31 u16), levels (40 u16), then the shifts.
-  const std::size_t shift0 = payload + 16 * 8 + 16 + 4 * 31 * 2 + 40 * 2;
+  // The coding prefix, times, 4 floats, codebook (4 x 31 u16), levels (40 u16), then the shifts.
+  const std::size_t shift0 = payload + 16 + 16 * 8 + 16 + 4 * 31 * 2 + 40 * 2;
   bytes[shift0] = char(16);  // the page has steps 0..15
   const std::uint32_t payload_crc = crc32_reference(bytes.data() + payload, field->page(0).bytes - 64);
   std::memcpy(bytes.data() + page + 44, &payload_crc, 4);
@@ -245,7 +269,7 @@ TEST(AlignedFile, VersionOneFilesStillReadAndCannotHoldAlignedPages) {
   p.predictive_lanes = false;
   const std::string v2 = temp_path("plain.pnbf"), v1 = temp_path("v1.pnbf");
   const auto current = write_field(f, v2, p);
-  const auto v1_bytes = with_version(testing::read_file(v2), 1);
+  const auto v1_bytes = written_as_version(*current, 1);
   testing::write_file(v1, v1_bytes.data(), v1_bytes.size());
   const auto old = CompressedField::open(v1);
   EXPECT_EQ(old->format_version(), 1u);
@@ -259,7 +283,7 @@ TEST(AlignedFile, VersionOneFilesStillReadAndCannotHoldAlignedPages) {
   const std::string al = temp_path("al2.pnbf");
   const auto aligned = write_field(f, al, small_params());
   ASSERT_EQ(aligned->page(0).method, PageMethod::vq_aligned);
-  const auto claims_v1 = with_version(testing::read_file(al), 1);
+  const auto claims_v1 = with_version(written_as_version(*aligned, 2), 1);
   testing::write_file(v1, claims_v1.data(), claims_v1.size());
   EXPECT_THROW(CompressedField::open(v1)->verify(), Error);
   const auto future = with_version(testing::read_file(al), kContainerFormatVersion + 1);

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 #include <set>
 
 #include "penumbra/compression/field_file.h"
@@ -9,6 +10,8 @@
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
 #include "bit_blocks_builder.h"
+#include "crc32_reference.h"
+#include "page_coding.h"
 #include "page_format.h"
 #include "value_layout.h"
 #include "expect_error.h"
@@ -223,7 +226,7 @@ TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
       return detail::kPatchedCode;
     });
   });
-  const auto bytes = detail::serialize_page(page, 0);
+  const auto bytes = detail::serialize_page(page, 0, 2);
   detail::PageHeader header;
   ASSERT_TRUE(detail::parse_page_header(bytes.data(), header));
   testing::expect_error(
@@ -297,6 +300,121 @@ TEST(FieldFile, UnfinishedRunLeavesARecoverablePartialFile) {
   EXPECT_THROW(CompressedField::open(path + ".partial"), Error);
   const auto rec = CompressedField::open(path + ".partial", {.recover_incomplete = true});
   EXPECT_EQ(rec->step_count(), 24u);  // three full windows of 8; the 3 buffered steps are lost
+}
+
+
+// ---- the lossless stage over page payloads (format version 6) -------------------------------
+
+std::uint32_t stored_coding(const std::vector<char>& file, const PageEntry& page) {
+  std::uint32_t coding;
+  std::memcpy(&coding, file.data() + page.offset + detail::PageHeader::kBytes, 4);
+  return coding;
+}
+
+TEST(FieldFile, PagesGoThroughZstdOnlyWhereItMakesThemSmallerAndDecodeBitForBit) {
+  // Slowly changing blobs under a bound: the predictive and residual pages' fixed-width slots
+  // hold long runs of zeros.
+  const auto f = testing::smooth_blobs(3000, 40);
+  const std::string plain = temp_path("plain.pnbf"), coded = temp_path("coded.pnbf");
+  CodecParams p;
+  p.window = 16;
+  p.bound = {BoundKind::range_relative, 1e-2};
+  p.entropy_level = 0;
+  write_field(f, plain, p);
+  p.entropy_level = 3;
+  write_field(f, coded, p);
+  const auto a = CompressedField::open(plain), b = CompressedField::open(coded);
+  ASSERT_EQ(a->page_count(), b->page_count());
+  const auto a_bytes = testing::read_file(plain), b_bytes = testing::read_file(coded);
+  int compressed = 0;
+  for (std::size_t i = 0; i < a->page_count(); ++i) {
+    EXPECT_EQ(stored_coding(a_bytes, a->page(i)), std::uint32_t(detail::PageCoding::stored)) << i;
+    const std::uint32_t coding = stored_coding(b_bytes, b->page(i));
+    if (coding == std::uint32_t(detail::PageCoding::zstd)) {
+      ++compressed;
+      EXPECT_LT(b->page(i).bytes, a->page(i).bytes) << i;
+    } else {
+      EXPECT_EQ(coding, std::uint32_t(detail::PageCoding::stored)) << i;
+      EXPECT_EQ(b->page(i).bytes, a->page(i).bytes) << i;
+    }
+  }
+  EXPECT_EQ(compressed, int(b->page_count())) << "every page of this field should compress";
+  EXPECT_LT(double(b->file_bytes()), 0.8 * double(a->file_bytes()));
+  std::vector<float> x(f.vertices), y(f.vertices);
+  for (std::uint64_t t = 0; t < f.steps; ++t) {
+    a->read_step(t, x.data());
+    b->read_step(t, y.data());
+    ASSERT_EQ(0, std::memcmp(x.data(), y.data(), x.size() * 4)) << "step " << t;
+  }
+  // A page of white noise at a tight bound does not shrink: it is stored as it is.
+  const auto noise = testing::white_noise(64, 8, 3);
+  const std::string noisy = temp_path("noise.pnbf");
+  CodecParams q = small_params({BoundKind::range_relative, 1e-6});
+  write_field(noise, noisy, q);
+  const auto n = CompressedField::open(noisy);
+  const auto n_bytes = testing::read_file(noisy);
+  q.entropy_level = 0;
+  write_field(noise, plain, q);
+  const auto n0 = CompressedField::open(plain);
+  for (std::size_t i = 0; i < n->page_count(); ++i) EXPECT_LE(n->page(i).bytes, n0->page(i).bytes) << i;
+}
+
+// A well-sealed page (both checksums right) whose coding prefix lies: each lie is named.
+TEST(FieldFile, ACodingPrefixThatLiesIsRejectedNamingThePage) {
+  const auto f = testing::smooth_blobs(3000, 16);
+  const std::string path = temp_path("coded.pnbf"), bad = temp_path("lying.pnbf");
+  CodecParams p;
+  p.window = 16;
+  p.bound = {BoundKind::range_relative, 1e-2};
+  write_field(f, path, p);
+  const auto field = CompressedField::open(path);
+  const auto original = testing::read_file(path);
+  const PageEntry& page = field->page(0);
+  ASSERT_EQ(stored_coding(original, page), std::uint32_t(detail::PageCoding::zstd));
+  const std::size_t prefix = page.offset + detail::PageHeader::kBytes;
+  std::uint64_t declared;
+  std::memcpy(&declared, original.data() + prefix + 8, 8);
+  const auto sealed = [&](auto patch) {
+    auto bytes = original;
+    patch(bytes);
+    const std::uint32_t payload_crc = testing::crc32_reference(bytes.data() + prefix, page.bytes - detail::PageHeader::kBytes);
+    std::memcpy(bytes.data() + page.offset + 44, &payload_crc, 4);
+    const std::uint32_t header_crc = testing::crc32_reference(bytes.data() + page.offset, 60);
+    std::memcpy(bytes.data() + page.offset + 60, &header_crc, 4);
+    testing::write_file(bad, bytes.data(), bytes.size());
+  };
+  const auto put32 = [&](std::vector<char>& b, std::size_t at, std::uint32_t v) { std::memcpy(b.data() + at, &v, 4); };
+  const auto put64 = [&](std::vector<char>& b, std::size_t at, std::uint64_t v) { std::memcpy(b.data() + at, &v, 8); };
+  const struct {
+    std::function<void(std::vector<char>&)> patch;
+    std::string says;
+  } lies[] = {
+      {[&](auto& b) { put32(b, prefix, 7); }, "unknown payload coding 7"},
+      {[&](auto& b) { put32(b, prefix + 4, 1); }, "nonzero reserved word"},
+      {[&](auto& b) { put64(b, prefix + 8, declared + 1); }, "its prefix declares " + std::to_string(declared + 1)},
+      {[&](auto& b) { put64(b, prefix + 8, declared - 1); }, "compressed payload"},
+      {[&](auto& b) { put64(b, prefix + 8, std::uint64_t(1) << 40); }, "more than a page of this field can hold"},
+      {[&](auto& b) { put32(b, prefix, 0); }, "declares " + std::to_string(declared)},  // "stored", but it is not
+      {[&](auto& b) { std::memset(b.data() + prefix + 16, 0xA5, 8); }, "does not decompress"},
+  };
+  for (const auto& lie : lies) {
+    sealed(lie.patch);
+    testing::expect_error([&] { CompressedField::open(bad)->load_page(0); }, ErrorCode::io_error, {"page 0", lie.says},
+                          lie.says);
+  }
+}
+
+TEST(FieldFile, AnEntropyLevelOutside0To19IsRefused) {
+  FieldInfo info;
+  info.name = "x";
+  info.vertex_count = 10;
+  for (const int level : {-1, 20})
+    testing::expect_error([&] { FieldWriter(temp_path("level.pnbf"), info, level); }, ErrorCode::invalid_argument,
+                          {"entropy_level must be 0..19"}, "FieldWriter");
+  CodecParams p = small_params();
+  p.entropy_level = 42;
+  testing::expect_error([&] { write_field(testing::smooth_blobs(10, 8), temp_path("level.pnbf"), p); },
+                        ErrorCode::invalid_argument, {"entropy_level must be 0..19, got 42"}, "StreamingEncoder");
 }
 
 }  // namespace

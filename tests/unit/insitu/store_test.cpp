@@ -160,7 +160,15 @@ TEST(Store, ConfigErrorsNameTheirKeys) {
   expect_error(R"({"directory": "s", "error_bound": {"absolute": 1, "relative": 1}})", "store.error_bound must have exactly one");
   expect_error(R"({"directory": "s", "error_bound": {"relative": 0}})", "store.error_bound.relative must be > 0");
   expect_error(R"({"directory": "s", "codebook_size": 1000})", "store.codebook_size must be in [2, 256]");
+  expect_error(R"({"directory": "s", "entropy_level": 20})", "store.entropy_level must be in [0, 19]");
   expect_error(R"({"directory": "s", "zfp": true})", "store.zfp is not a known key");
+  const auto level = [](const std::string& store) {
+    return parse_config(testing::small_config("/tmp/unused", R"([{"name": "T"}])", R"(, "store": )" + store))
+        .store->codec.entropy_level;
+  };
+  EXPECT_EQ(level(R"({"directory": "s", "entropy_level": 0})"), 0);
+  EXPECT_EQ(level(R"({"directory": "s", "entropy_level": 19})"), 19);
+  EXPECT_EQ(level(R"({"directory": "s"})"), compression::CodecParams{}.entropy_level);
 }
 
 }  // namespace

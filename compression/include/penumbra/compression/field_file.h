@@ -35,10 +35,11 @@ struct PageEntry {
 /// (time values, value range, page table), all under CRC-32 checksums. Pages go to
 /// `path + ".partial"` as they come, flushed one by one, so a run that dies keeps every
 /// finished page (CompressedField::open with recover_incomplete reads them); finish() adds
-/// the index and renames the file into place atomically.
+/// the index and renames the file into place atomically. Each page's bytes go through zstd at
+/// `entropy_level` (CodecParams::entropy_level: 0..19, 0 none).
 class FieldWriter {
 public:
-  FieldWriter(const std::string& path, const FieldInfo& info);
+  FieldWriter(const std::string& path, const FieldInfo& info, int entropy_level = CodecParams{}.entropy_level);
   ~FieldWriter();
   FieldWriter(const FieldWriter&) = delete;
   FieldWriter& operator=(const FieldWriter&) = delete;
@@ -54,6 +55,7 @@ private:
   void write_bytes(const void* data, std::size_t size);
   std::string m_path, m_partial;
   FieldInfo m_info;
+  int m_entropy_level;
   std::FILE* m_file = nullptr;
   std::uint64_t m_offset = 0;
   std::vector<PageEntry> m_pages;
@@ -75,6 +77,7 @@ struct OpenOptions {
 /// 90-130 MB/s; Pager keeps one for its background loads.
 struct PageBuffers {
   std::vector<std::uint8_t> bytes;
+  std::vector<std::uint8_t> payload;  ///< the last page's payload where the file holds it compressed
   std::shared_ptr<EncodedPage> spare;
 };
 

@@ -14,5 +14,7 @@ namespace penumbra::compression {
 ///   5  predictive_lanes blocks hold a width for step 2, one for the transient steps after it and
 ///      where those end (per block); version-3 and -4 lane pages read with their transient steps
 ///      ending at step 6
-constexpr int kContainerFormatVersion = 5;
+///   6  each page's payload follows a 16-byte coding prefix and may be one zstd frame
+///      (CodecParams::entropy_level); the payloads' layouts are unchanged
+constexpr int kContainerFormatVersion = 6;
 }  // namespace penumbra::compression
