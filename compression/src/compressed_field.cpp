@@ -11,6 +11,7 @@
 #include "crc32.h"
 #include "file_layout.h"
 #include "huge_pages.h"
+#include "page_coding.h"
 #include "page_format.h"
 #include "page_methods.h"
 #include "penumbra/compression/field_file.h"
@@ -126,9 +127,13 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         e.value_max = ir.get<float>();
         e.bound = ir.get<float>();
         ir.get<std::uint32_t>();
+        const bool coded = f->m_version >= detail::kFirstCodedVersion;
+        if (coded) e.payload_bytes = ir.get<std::uint64_t>();
+        const std::uint64_t min_bytes = detail::PageHeader::kBytes + (coded ? detail::kCodingPrefixBytes : 0);
         if (e.offset != expect_offset || e.first_step != expect_step || e.step_count < 1 ||
-            e.step_count > info.window || e.bytes < detail::PageHeader::kBytes || std::uint32_t(e.method) > f->max_method())
+            e.step_count > info.window || e.bytes < min_bytes || std::uint32_t(e.method) > f->max_method())
           ir.fail("entry of " + page_name(i) + " is inconsistent");
+        if (!coded) e.payload_bytes = e.bytes - detail::PageHeader::kBytes;
         expect_offset += e.bytes;
         expect_step += e.step_count;
         f->m_pages.push_back(e);
@@ -178,7 +183,12 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       break;
     }
     PageEntry e{pos, detail::PageHeader::kBytes + h.payload_bytes, h.first_step, h.step_count,
-                PageMethod(h.method), h.value_min, h.value_max, h.bound};
+                PageMethod(h.method), h.value_min, h.value_max, h.bound, h.payload_bytes};
+    if (f->m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
+      std::uint8_t prefix[detail::kCodingPrefixBytes];
+      read_at(f->m_fd, path, pos + detail::PageHeader::kBytes, prefix, sizeof prefix, page_name(i));
+      e.payload_bytes = detail::declared_payload_bytes(prefix);
+    }
     if (options.recover_incomplete) {
       try {
         f->m_pages.push_back(e);
@@ -242,6 +252,9 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index,
   const std::uint8_t* payload = bytes.data() + detail::PageHeader::kBytes;
   if (detail::crc32(payload, h.payload_bytes) != h.payload_crc)
     throw Error(ErrorCode::io_error, name + ": checksum mismatch (the page is corrupt)");
+  if (m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes &&
+      detail::declared_payload_bytes(payload) != e.payload_bytes)
+    throw Error(ErrorCode::io_error, name + ": coding prefix does not match the index");
   std::shared_ptr<EncodedPage> page = std::move(buffers.spare);  // leaves spare empty
   if (!page || page.use_count() != 1) page = std::make_shared<EncodedPage>();
   try {

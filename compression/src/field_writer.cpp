@@ -39,7 +39,7 @@ std::vector<std::uint8_t> serialize_header(const FieldInfo& info) {
 }
 
 std::vector<std::uint8_t> serialize_index(const std::vector<PageEntry>& pages, const std::vector<double>& times,
-                                          float value_min, float value_max) {
+                                          float value_min, float value_max, std::uint32_t format_version) {
   std::vector<std::uint8_t> bytes;
   ByteWriter w(bytes);
   w.put(kIndexMagic);
@@ -58,6 +58,7 @@ std::vector<std::uint8_t> serialize_index(const std::vector<PageEntry>& pages, c
     w.put(p.value_max);
     w.put(p.bound);
     w.put(std::uint32_t(0));
+    if (format_version >= kFirstCodedVersion) w.put(p.payload_bytes);
   }
   w.put(crc32(bytes.data(), bytes.size()));
   return bytes;
@@ -117,7 +118,8 @@ void FieldWriter::write_page(const EncodedPage& page) {
   const auto bytes =
       detail::serialize_page(page, std::uint32_t(m_pages.size()), kContainerFormatVersion, m_entropy_level);
   PageEntry entry{m_offset, bytes.size(), page.first_step, page.step_count, page.method,
-                  page.value_min, page.value_max, page.bound};
+                  page.value_min, page.value_max, page.bound,
+                  detail::declared_payload_bytes(bytes.data() + detail::PageHeader::kBytes)};
   write_bytes(bytes.data(), bytes.size());
   if (std::fflush(m_file) != 0)
     throw Error(ErrorCode::io_error, "FieldWriter: flushing '" + m_partial + "' failed: " + std::strerror(errno));

@@ -20,13 +20,19 @@ void put_prefix(std::uint8_t* at, PageCoding coding, std::uint64_t bytes) {
 
 }  // namespace
 
+std::uint64_t declared_payload_bytes(const std::uint8_t* stored) {
+  std::uint64_t bytes;
+  std::memcpy(&bytes, stored + 8, 8);
+  return bytes;
+}
+
 void append_coded_payload(const std::uint8_t* payload, std::uint64_t bytes, int level, std::vector<std::uint8_t>& out) {
   const std::size_t start = out.size();
   if (level > 0) {
     const std::size_t bound = ZSTD_compressBound(bytes);
     out.resize(start + kCodingPrefixBytes + bound);
     const std::size_t framed = ZSTD_compress(out.data() + start + kCodingPrefixBytes, bound, payload, bytes, level);
-    if (!ZSTD_isError(framed) && framed < bytes) {
+    if (!ZSTD_isError(framed) && framed <= bytes - bytes / kMinSavingPart) {
       put_prefix(out.data() + start, PageCoding::zstd, bytes);
       out.resize(start + kCodingPrefixBytes + framed);
       return;
@@ -44,7 +50,7 @@ const std::uint8_t* decode_coded_payload(const std::uint8_t* stored, std::uint64
   if (stored_bytes < kCodingPrefixBytes) fail("payload shorter than its 16-byte coding prefix");
   std::uint32_t words[2];
   std::memcpy(words, stored, 8);
-  std::memcpy(&bytes, stored + 8, 8);
+  bytes = declared_payload_bytes(stored);
   const std::uint8_t* data = stored + kCodingPrefixBytes;
   const std::uint64_t data_bytes = stored_bytes - kCodingPrefixBytes;
   if (words[1] != 0) fail("coding prefix has a nonzero reserved word");

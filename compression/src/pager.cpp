@@ -12,10 +12,12 @@ namespace penumbra::compression {
 
 namespace {
 
-// Memory a page takes once loaded, from its index entry: its bytes on disk, plus the
-// per-vertex section offsets derived at load time for pages with bit blocks (4 bytes per vertex).
+// Memory a page takes once loaded, from its index entry: its payload's bytes once its coding is
+// undone (up to 7 times those on disk), plus the per-vertex section offsets derived at load time
+// for pages with bit blocks (4 bytes per vertex).
 std::uint64_t loaded_bytes(const CompressedField& field, const PageEntry& page) {
-  return page.bytes + (page.method == PageMethod::vq ? 0 : field.info().vertex_count * 4);
+  constexpr std::uint64_t kHeaderBytes = 64;
+  return kHeaderBytes + page.payload_bytes + (page.method == PageMethod::vq ? 0 : field.info().vertex_count * 4);
 }
 
 }  // namespace

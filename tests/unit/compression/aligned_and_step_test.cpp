@@ -161,10 +161,11 @@ std::vector<char> written_as_version(const CompressedField& field, std::uint32_t
     PageEntry e = field.page(i);
     e.offset = bytes.size();
     e.bytes = page.size();
+    e.payload_bytes = page.size() - detail::PageHeader::kBytes - (version >= 6 ? 16 : 0);
     entries.push_back(e);
     bytes.insert(bytes.end(), page.begin(), page.end());
   }
-  const auto index = detail::serialize_index(entries, field.times(), field.value_min(), field.value_max());
+  const auto index = detail::serialize_index(entries, field.times(), field.value_min(), field.value_max(), version);
   const std::uint64_t index_offset = bytes.size();
   bytes.insert(bytes.end(), index.begin(), index.end());
   const auto tail = detail::serialize_tail(index_offset, bytes.size() + detail::kTailBytes, std::uint32_t(index.size()));

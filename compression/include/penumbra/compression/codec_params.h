@@ -48,8 +48,8 @@ struct CodecParams {
   /// sections (PageMethod::predictive), as files of format versions 1 and 2 hold them.
   bool predictive_lanes = true;
   /// zstd level of the lossless stage over each page's bytes, 1..19; 0 stores pages as they
-  /// are. A page is kept as it is where zstd would not make it smaller. Level 3 compresses at
-  /// about 250 MB/s of page bytes on the writer's thread and loads undo it at about 1 GB/s.
+  /// are. A page is kept as it is where zstd would not save an eighth of it. Level 3 compresses
+  /// at about 250 MB/s of page bytes on the writer's thread and loads undo it at about 1 GB/s.
   int entropy_level = 3;
 };
 

@@ -29,6 +29,7 @@ struct PageEntry {
   std::uint32_t step_count = 0;
   PageMethod method = PageMethod::vq;
   float value_min = 0, value_max = 0, bound = 0;
+  std::uint64_t payload_bytes = 0;  ///< the payload's once loaded (compressed on disk from format version 6)
 };
 
 /// Writes one field's file: versioned header, one page per window, then an index trailer
