@@ -152,14 +152,12 @@ void reset_keeping_memory(EncodedPage& page) {
   page = std::move(fresh);
 }
 
-}  // namespace
-
-namespace {
-
 // More than the payload of any valid page of N vertices, n steps and codebooks of K entries can
-// take (every value stored as a raw float, twice over): what a compressed payload may declare.
+// take, what a compressed payload may declare. The largest per value is a lane page's: a raw
+// float, a slot and an exception's high part of up to 32 bits each, and an exception row's 4
+// bytes shared by 16 lanes; 16 bytes per value covers it.
 std::uint64_t max_payload_bytes(std::uint64_t N, std::uint32_t W, std::uint32_t K, std::uint32_t n) {
-  return 8ull * n + 16ull * K * (2ull * W + 8) + (N + kLaneBlock) * (8ull * n + 64) + 4096;
+  return 8ull * n + 16ull * K * (2ull * W + 8) + (N + kLaneBlock) * (16ull * n + 64) + 4096;
 }
 
 }  // namespace

@@ -145,11 +145,19 @@ unsigned worker_count() {
   return hardware;
 }
 
+namespace {
+thread_local unsigned t_serial_scopes = 0;
+}  // namespace
+
+SerialScope::SerialScope() { ++t_serial_scopes; }
+SerialScope::~SerialScope() { --t_serial_scopes; }
+
 void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& body) {
   if (n == 0) return;
   grain = std::max<std::size_t>(grain, 1);
   const std::size_t chunks = (n + grain - 1) / grain;
-  const unsigned threads = static_cast<unsigned>(std::min<std::size_t>(worker_count(), chunks));
+  const unsigned threads =
+      t_serial_scopes ? 1u : static_cast<unsigned>(std::min<std::size_t>(worker_count(), chunks));
   std::atomic<std::size_t> next{0};
   std::exception_ptr failure;
   std::mutex failure_mutex;

@@ -1,6 +1,7 @@
 // tests/unit/core/thread_pool_test.cpp
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -27,6 +28,36 @@ TEST(ThreadPool, RethrowsOnCaller) {
                  if (b == 50) throw std::runtime_error("boom");
                }),
                std::runtime_error);
+}
+
+TEST(ThreadPool, ASerialScopeKeepsEveryChunkOnItsThreadInOrderUntilItEnds) {
+  const auto threads_used = [] {
+    std::mutex m;
+    std::set<std::thread::id> ids;
+    std::vector<std::size_t> starts;
+    penumbra::parallel_for(4096, 1, [&](std::size_t b, std::size_t) {
+      std::this_thread::sleep_for(std::chrono::microseconds(b % 64 == 0 ? 200 : 0));  // room for a second thread
+      std::lock_guard<std::mutex> lock(m);
+      ids.insert(std::this_thread::get_id());
+      starts.push_back(b);
+    });
+    EXPECT_EQ(starts.size(), 4096u);
+    return std::make_pair(ids, std::is_sorted(starts.begin(), starts.end()));
+  };
+  {
+    penumbra::SerialScope serial;
+    {
+      penumbra::SerialScope nested;
+    }
+    const auto [ids, in_order] = threads_used();  // the nested scope's end leaves this one in force
+    EXPECT_EQ(ids, std::set<std::thread::id>{std::this_thread::get_id()});
+    EXPECT_TRUE(in_order);
+    // Another thread's calls are not affected.
+    std::set<std::thread::id> other;
+    std::thread([&] { other = threads_used().first; }).join();
+    if (penumbra::worker_count() > 1) EXPECT_GT(other.size(), 1u);
+  }
+  if (penumbra::worker_count() > 1) EXPECT_GT(threads_used().first.size(), 1u);
 }
 
 TEST(ThreadPool, NestedCallsCompleteAndCoverEveryIndex) {

@@ -15,4 +15,15 @@ unsigned worker_count();
 /// body: a call that finds the kept workers busy starts threads of its own.
 void parallel_for(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& body);
 
+/// While one lives, parallel_for calls made on its thread run every chunk on that thread, in
+/// order (the first exception ends the call). For a thread that must leave the other cores to a
+/// background job it waits on, such as a page load its next reads need.
+class SerialScope {
+public:
+  SerialScope();
+  ~SerialScope();
+  SerialScope(const SerialScope&) = delete;
+  SerialScope& operator=(const SerialScope&) = delete;
+};
+
 }  // namespace penumbra
