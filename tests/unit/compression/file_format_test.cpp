@@ -305,6 +305,15 @@ TEST(FieldFile, UnfinishedRunLeavesARecoverablePartialFile) {
 
 // ---- the lossless stage over page payloads (format version 6) -------------------------------
 
+// Windows of 16 steps within 1e-2 of the range: on slowly changing blobs the predictive and
+// residual pages' fixed-width slots hold long runs of zeros, which zstd shrinks well.
+CodecParams bounded_16_step_windows() {
+  CodecParams p;
+  p.window = 16;
+  p.bound = {BoundKind::range_relative, 1e-2};
+  return p;
+}
+
 std::uint32_t stored_coding(const std::vector<char>& file, const PageEntry& page) {
   std::uint32_t coding;
   std::memcpy(&coding, file.data() + page.offset + detail::PageHeader::kBytes, 4);
@@ -312,13 +321,9 @@ std::uint32_t stored_coding(const std::vector<char>& file, const PageEntry& page
 }
 
 TEST(FieldFile, PagesGoThroughZstdOnlyWhereItSavesAnEighthAndDecodeBitForBit) {
-  // Slowly changing blobs under a bound: the predictive and residual pages' fixed-width slots
-  // hold long runs of zeros.
   const auto f = testing::smooth_blobs(3000, 40);
   const std::string plain = temp_path("plain.pnbf"), coded = temp_path("coded.pnbf");
-  CodecParams p;
-  p.window = 16;
-  p.bound = {BoundKind::range_relative, 1e-2};
+  CodecParams p = bounded_16_step_windows();
   p.entropy_level = 0;
   write_field(f, plain, p);
   p.entropy_level = 3;
@@ -352,7 +357,6 @@ TEST(FieldFile, PagesGoThroughZstdOnlyWhereItSavesAnEighthAndDecodeBitForBit) {
   CodecParams q = small_params({BoundKind::range_relative, 1e-6});
   write_field(noise, noisy, q);
   const auto n = CompressedField::open(noisy);
-  const auto n_bytes = testing::read_file(noisy);
   q.entropy_level = 0;
   write_field(noise, plain, q);
   const auto n0 = CompressedField::open(plain);
@@ -363,10 +367,7 @@ TEST(FieldFile, PagesGoThroughZstdOnlyWhereItSavesAnEighthAndDecodeBitForBit) {
 TEST(FieldFile, ACodingPrefixThatLiesIsRejectedNamingThePage) {
   const auto f = testing::smooth_blobs(3000, 16);
   const std::string path = temp_path("coded.pnbf"), bad = temp_path("lying.pnbf");
-  CodecParams p;
-  p.window = 16;
-  p.bound = {BoundKind::range_relative, 1e-2};
-  write_field(f, path, p);
+  write_field(f, path, bounded_16_step_windows());
   const auto field = CompressedField::open(path);
   const auto original = testing::read_file(path);
   const PageEntry& page = field->page(0);
