@@ -184,12 +184,12 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
     }
     PageEntry e{pos, detail::PageHeader::kBytes + h.payload_bytes, h.first_step, h.step_count,
                 PageMethod(h.method), h.value_min, h.value_max, h.bound, h.payload_bytes};
-    if (f->m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
-      std::uint8_t prefix[detail::kCodingPrefixBytes];
-      read_at(f->m_fd, path, pos + detail::PageHeader::kBytes, prefix, sizeof prefix, page_name(i));
-      e.payload_bytes = detail::declared_payload_bytes(prefix);
-    }
     if (options.recover_incomplete) {
+      if (f->m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
+        std::uint8_t prefix[detail::kCodingPrefixBytes];
+        read_at(f->m_fd, path, pos + detail::PageHeader::kBytes, prefix, sizeof prefix, page_name(i));
+        e.payload_bytes = detail::declared_payload_bytes(prefix);
+      }
       try {
         f->m_pages.push_back(e);
         const auto page = f->load_page(i);

@@ -80,8 +80,9 @@ std::vector<std::uint8_t> serialize_tail(std::uint64_t index_offset, std::uint64
 FieldWriter::FieldWriter(const std::string& path, const FieldInfo& info, int entropy_level)
     : m_path(path), m_partial(path + ".partial"), m_info(info), m_entropy_level(entropy_level) {
   require(!path.empty(), "FieldWriter: empty path");
-  require(entropy_level >= 0 && entropy_level <= detail::kMaxEntropyLevel,
-          "FieldWriter: entropy_level must be 0..19, got " + std::to_string(entropy_level));
+  require(entropy_level >= 0 && entropy_level <= kMaxEntropyLevel,
+          "FieldWriter: entropy_level must be 0.." + std::to_string(kMaxEntropyLevel) + ", got " +
+              std::to_string(entropy_level));
   require(info.vertex_count >= 1, "FieldWriter: vertex_count must be positive");
   require(detail::valid_window(info.window),
           "FieldWriter: window must be a multiple of 8 in [8, 1024], got " + std::to_string(info.window));

@@ -12,14 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/compression/codec_params.h"
+
 namespace penumbra::compression::detail {
 
 constexpr std::uint32_t kFirstCodedVersion = 6;
 constexpr std::size_t kCodingPrefixBytes = 16;
 enum class PageCoding : std::uint32_t { stored = 0, zstd = 1 };
 
-/// zstd levels a writer may ask for (0: every payload stored as it is).
-constexpr int kMaxEntropyLevel = 19;
 /// A frame is kept where it saves at least this part of the payload (an eighth). Undoing it runs
 /// at about 1 GB/s, several times slower than reading the stored bytes: a frame saving 3-12 %
 /// (the EEG-like field's pages) tripled their load times, and fast playback found its next page

@@ -175,7 +175,8 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
     throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) + " cannot hold a page of method " +
                                                  std::to_string(std::uint32_t(p.method)));
   if (entropy_level < 0 || entropy_level > kMaxEntropyLevel)
-    throw Error(ErrorCode::invalid_argument, "entropy level " + std::to_string(entropy_level) + " is outside 0..19");
+    throw Error(ErrorCode::invalid_argument, "entropy level " + std::to_string(entropy_level) + " is outside 0.." +
+                                                 std::to_string(kMaxEntropyLevel));
   std::vector<std::uint8_t> bytes(PageHeader::kBytes, 0);
   ByteWriter w(bytes);
   w.put_array(p.times);

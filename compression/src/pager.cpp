@@ -5,6 +5,7 @@
 #include <string>
 #include <thread>
 
+#include "page_format.h"
 #include "penumbra/compression/window_codec.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
@@ -17,8 +18,7 @@ namespace {
 // undone (up to 7 times those on disk), plus the per-vertex section offsets derived at load time
 // for pages with bit blocks (4 bytes per vertex).
 std::uint64_t loaded_bytes(const CompressedField& field, const PageEntry& page) {
-  constexpr std::uint64_t kHeaderBytes = 64;
-  return kHeaderBytes + page.payload_bytes + (page.method == PageMethod::vq ? 0 : field.info().vertex_count * 4);
+  return detail::PageHeader::kBytes + page.payload_bytes + (page.method == PageMethod::vq ? 0 : field.info().vertex_count * 4);
 }
 
 }  // namespace

@@ -405,7 +405,7 @@ StoreConfig parse_store(const json& j, const std::string& path) {
     if (!(s.codec.bound.value > 0)) fail(vp, "must be > 0");
   }
   if (const json* e = find(j, "entropy_level"))
-    s.codec.entropy_level = static_cast<int>(integer(*e, child(path, "entropy_level"), 0, 19));
+    s.codec.entropy_level = static_cast<int>(integer(*e, child(path, "entropy_level"), 0, compression::kMaxEntropyLevel));
   if (const json* m = find(j, "memory_budget_mb"))
     s.memory_budget_bytes = static_cast<std::uint64_t>(integer(*m, child(path, "memory_budget_mb"), 1, 1 << 24)) << 20;
   return s;

@@ -14,6 +14,7 @@
 #include "crc32_reference.h"
 #include "expect_error.h"
 #include "file_layout.h"
+#include "page_coding.h"
 #include "page_format.h"
 #include "stream_field.h"
 #include "temp_path.h"
@@ -161,7 +162,8 @@ std::vector<char> written_as_version(const CompressedField& field, std::uint32_t
     PageEntry e = field.page(i);
     e.offset = bytes.size();
     e.bytes = page.size();
-    e.payload_bytes = page.size() - detail::PageHeader::kBytes - (version >= 6 ? 16 : 0);
+    e.payload_bytes =
+        page.size() - detail::PageHeader::kBytes - (version >= detail::kFirstCodedVersion ? detail::kCodingPrefixBytes : 0);
     entries.push_back(e);
     bytes.insert(bytes.end(), page.begin(), page.end());
   }

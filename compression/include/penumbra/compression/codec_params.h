@@ -15,6 +15,9 @@ struct ErrorBound {
 };
 
 /// Parameters of the time-window vector-quantisation codec (Bernardon et al., sec. 3).
+/// The highest zstd level CodecParams::entropy_level takes.
+constexpr int kMaxEntropyLevel = 19;
+
 struct CodecParams {
   /// Time steps per window (= per page). A multiple of 8 in [8, 1024]: D8 holds the means
   /// of 8 equal sub-blocks, D_W the per-step detail.
