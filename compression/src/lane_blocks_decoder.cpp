@@ -283,13 +283,17 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
     d = _mm512_mask_add_epi32(error2, linear, error2, d);
     k = _mm512_add_epi32(k, d);
     put(out, values512(lo, step, k));
-    const auto steps = [&](const LaneStepSpan& span, auto rows_left) __attribute__((always_inline)) {
-      constexpr bool kRows = decltype(rows_left)::value;
+    const auto steps = [&](const LaneStepSpan& span, auto rows_left, auto plain) __attribute__((always_inline)) {
+      constexpr bool kRows = decltype(rows_left)::value, kPlain = decltype(plain)::value;
       const std::uint32_t w = span.width;
       const auto advance = [&](__m512i error) __attribute__((always_inline)) {
         out += N;
-        d = _mm512_mask_add_epi32(error, linear, error, d);
-        k = _mm512_add_epi32(k, d);
+        if constexpr (kPlain) {
+          k = _mm512_add_epi32(k, error);
+        } else {
+          d = _mm512_mask_add_epi32(error, linear, error, d);
+          k = _mm512_add_epi32(k, d);
+        }
         put(out, values512(lo, step, k));
       };
       if (w == 0) {
@@ -317,9 +321,14 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       end = slots.end();
     };
     // Each span looks for exception rows only if it has one (a row's step is in it: the rows
-    // before it were taken).
+    // before it were taken), and keeps no difference in a block without extrapolating lanes (k
+    // plus the error: 1.5-5.6 % on mug's lane pages, more than half of whose blocks have none).
     const auto span = [&](const LaneStepSpan& s) __attribute__((always_inline)) {
-      exceptions.next != 0 && exceptions.next < s.to ? steps(s, std::true_type{}) : steps(s, std::false_type{});
+      const bool rows_left = exceptions.next != 0 && exceptions.next < s.to;
+      if (linear == 0)
+        rows_left ? steps(s, std::true_type{}, std::true_type{}) : steps(s, std::false_type{}, std::true_type{});
+      else
+        rows_left ? steps(s, std::true_type{}, std::false_type{}) : steps(s, std::false_type{}, std::false_type{});
     };
     const auto spans = lane_step_spans(L, c, n);  // named calls: a loop over the two cost AVX2 7 %
     span(spans[1]);
