@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <string>
 
 #include "crc32_reference.h"
@@ -93,6 +94,37 @@ TEST(LaneBlocks, EveryPathHoldsTheBoundOnHardWindows) {
   // Fewer vertices than one block.
   const auto few = testing::white_noise(5, 9);
   expect_paths_agree(few, 9, testing::encode(few, 0, 9, CodecParams{}, 1e-2f * few.range()), "5 vertices");
+}
+
+// Blocks whose lanes all hold their last value (the AVX-512 window then keeps no difference) and
+// blocks with extrapolating lanes, both with exception rows, decode alike on every path.
+TEST(LaneBlocks, BlocksWithAndWithoutExtrapolatingLanesDecodeAlike) {
+  const std::uint64_t N = 64;
+  const std::uint32_t n = 40;
+  SyntheticField f{N, n, std::vector<float>(N * n), std::vector<double>(n)};
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> noise(0.f, 0.02f);
+  for (std::uint32_t t = 0; t < n; ++t) {
+    f.times[t] = t;
+    for (std::uint64_t v = 0; v < N; ++v) {
+      const bool ramps = (v / 16) % 2 == 0;
+      float x = ramps ? float(v) + 0.5f * float(1 + v % 4) * float(t) : float(v % 7) + noise(rng);
+      if (v % 5 == 0 && t == 7 + v % 20) x += 60.f;  // a spike: an exception row
+      f.values[std::uint64_t(t) * N + v] = x;
+    }
+  }
+  const auto page = testing::encode(f, 0, n, CodecParams{}, 1e-3f * f.range());
+  ASSERT_EQ(page.method, PageMethod::predictive_lanes);
+  const LaneBlocks& L = page.lanes;
+  int plain_with_rows = 0, linear_with_rows = 0;
+  for (std::uint64_t b = 0; b < L.block_count(); ++b) {
+    const bool rows = L.row_start[b + 1] > L.row_start[b];
+    plain_with_rows += rows && L.linear[b] == 0;
+    linear_with_rows += rows && L.linear[b] != 0;
+  }
+  EXPECT_GT(plain_with_rows, 0);
+  EXPECT_GT(linear_with_rows, 0);
+  expect_paths_agree(f, n, page, "ramps and noise with spikes");
 }
 
 TEST(LaneBlocks, ValuesTheQuantiserCannotHoldAreStoredExactly) {
