@@ -118,6 +118,14 @@ inline std::uint32_t lane_slot(const std::uint32_t* rows, std::uint64_t pos, std
   return std::uint32_t(pair >> (pos & 31)) & low_mask(width);
 }
 
+/// The row holding bit `end` of every column: (end / 32) rows of 64 bytes on from `rows`. Written
+/// as end rounded down to 32, times 2 bytes, which GCC computes in an `and` and an `lea` where it
+/// gave the row index two shifts and an add: with a 2-step unroll, 1.04-1.047x on mug's lane
+/// pages (the step loop is bound by its instructions).
+inline const std::uint32_t* row_holding(const std::uint32_t* rows, std::uint64_t end) {
+  return reinterpret_cast<const std::uint32_t*>(reinterpret_cast<const char*>(rows) + (end & ~std::uint64_t(31)) * 2);
+}
+
 /// One block's decoder state: k at the last two steps of every lane, and where the block's
 /// next step, exception row and high part are.
 struct LaneBlockState {

@@ -22,7 +22,7 @@ constexpr std::uint64_t kHalf = kLaneBlock / 2;
 // `end` lies in and the row below it (the page's zero row below row 0), as the AVX-512 decoder
 // reads them. A slot that ends there is their top bits.
 inline void bits_ending256(const std::uint32_t* rows, std::uint64_t end, __m256i u[2]) {
-  const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
+  const std::uint32_t* r = row_holding(rows, end);
   const __m128i right = _mm_cvtsi32_si128(int(end & 31)), left = _mm_cvtsi32_si128(int(32 - (end & 31)));
   for (std::uint64_t h = 0; h < 2; ++h) {
     const __m256i below = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r - kLaneBlock + h * kHalf));

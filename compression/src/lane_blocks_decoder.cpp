@@ -109,7 +109,7 @@ PNB_TARGET_REGION_BEGIN("avx512f")
 // an or, for any AVX-512 CPU.
 struct TwoShifts {
   static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
-    const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
+    const std::uint32_t* r = row_holding(rows, end);
     const std::uint32_t sh = std::uint32_t(end & 31);
     return _mm512_or_si512(_mm512_srl_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm_cvtsi32_si128(int(sh))),
                            _mm512_sll_epi32(_mm512_loadu_si512(r), _mm_cvtsi32_si128(int(32 - sh))));
@@ -191,7 +191,7 @@ PNB_TARGET_REGION_BEGIN("avx512f,avx512vbmi2")
 struct FunnelShift {
   // `shift`: end % 32 in every lane (the funnel shift reads only a count's low 5 bits).
   static __m512i funnel(const std::uint32_t* rows, std::uint64_t end, __m512i shift) {
-    const std::uint32_t* r = rows + (end >> 5) * kLaneBlock;
+    const std::uint32_t* r = row_holding(rows, end);
     return _mm512_shrdv_epi32(_mm512_loadu_si512(r - kLaneBlock), _mm512_loadu_si512(r), shift);
   }
   static __m512i bits_ending(const std::uint32_t* rows, std::uint64_t end) {
@@ -313,7 +313,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       // two operations on Intel cores, one of them on the shuffle port (2-4 % on mug's pages).
       const __m512i spare = _mm512_set1_epi32(int(32 - w));
       typename Bits::Reader slots(rows, end, w);
-#pragma GCC unroll 4
+#pragma GCC unroll 2
       for (std::uint32_t t = span.from; t < span.to; ++t) {
         const __m512i error = _mm512_srav_epi32(slots.next(), spare);
         advance(kRows ? exceptions.add(t, w, error) : error);
