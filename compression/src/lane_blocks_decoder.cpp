@@ -313,6 +313,7 @@ void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
       // two operations on Intel cores, one of them on the shuffle port (2-4 % on mug's pages).
       const __m512i spare = _mm512_set1_epi32(int(32 - w));
       typename Bits::Reader slots(rows, end, w);
+      // Unrolled by 2: 1.01-1.015x over 4 on mug's lane pages (8: 0.96-0.98x).
 #pragma GCC unroll 2
       for (std::uint32_t t = span.from; t < span.to; ++t) {
         const __m512i error = _mm512_srav_epi32(slots.next(), spare);
