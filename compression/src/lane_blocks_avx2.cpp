@@ -84,6 +84,7 @@ inline void put256(const __m256 v[2], std::uint64_t lanes, float* out) {
   std::memcpy(out, all, lanes * 4);
 }
 
+// A window above this (about half of L2) gets row prefetches: see lane_blocks_window_avx2.
 constexpr std::uint64_t kPrefetchWindowBytes = 1 << 20;
 
 // Each block keeps k and its last difference as in avx512_window. One block at a time: its two
