@@ -80,7 +80,7 @@ std::vector<std::uint8_t> serialize_tail(std::uint64_t index_offset, std::uint64
 FieldWriter::FieldWriter(const std::string& path, const FieldInfo& info, int entropy_level)
     : m_path(path), m_partial(path + ".partial"), m_info(info), m_entropy_level(entropy_level) {
   require(!path.empty(), "FieldWriter: empty path");
-  require(entropy_level >= 0 && entropy_level <= kMaxEntropyLevel,
+  require(detail::valid_entropy_level(entropy_level),
           "FieldWriter: entropy_level must be 0.." + std::to_string(kMaxEntropyLevel) + ", got " +
               std::to_string(entropy_level));
   require(info.vertex_count >= 1, "FieldWriter: vertex_count must be positive");

@@ -26,21 +26,24 @@ std::uint64_t declared_payload_bytes(const std::uint8_t* stored) {
   return bytes;
 }
 
-void append_coded_payload(const std::uint8_t* payload, std::uint64_t bytes, int level, std::vector<std::uint8_t>& out) {
-  const std::size_t start = out.size();
+void code_payload_in_place(std::vector<std::uint8_t>& page, std::size_t prefix_at, int level) {
+  const std::size_t start = prefix_at + kCodingPrefixBytes;
+  const std::uint64_t bytes = page.size() - start;
   if (level > 0) {
+    // The frame goes into a new page after the same leading bytes, which replaces this one if
+    // the frame is kept: the payload is read once and nothing large is copied.
     const std::size_t bound = ZSTD_compressBound(bytes);
-    out.resize(start + kCodingPrefixBytes + bound);
-    const std::size_t framed = ZSTD_compress(out.data() + start + kCodingPrefixBytes, bound, payload, bytes, level);
+    std::vector<std::uint8_t> framed_page(start + bound);
+    const std::size_t framed = ZSTD_compress(framed_page.data() + start, bound, page.data() + start, bytes, level);
     if (!ZSTD_isError(framed) && framed <= bytes - bytes / kMinSavingPart) {
-      put_prefix(out.data() + start, PageCoding::zstd, bytes);
-      out.resize(start + kCodingPrefixBytes + framed);
+      std::memcpy(framed_page.data(), page.data(), prefix_at);
+      framed_page.resize(start + framed);
+      page.swap(framed_page);
+      put_prefix(page.data() + prefix_at, PageCoding::zstd, bytes);
       return;
     }
   }
-  out.resize(start + kCodingPrefixBytes + bytes);
-  put_prefix(out.data() + start, PageCoding::stored, bytes);
-  if (bytes) std::memcpy(out.data() + start + kCodingPrefixBytes, payload, bytes);
+  put_prefix(page.data() + prefix_at, PageCoding::stored, bytes);
 }
 
 const std::uint8_t* decode_coded_payload(const std::uint8_t* stored, std::uint64_t stored_bytes, std::uint64_t max_bytes,

@@ -20,6 +20,11 @@ constexpr std::uint32_t kFirstCodedVersion = 6;
 constexpr std::size_t kCodingPrefixBytes = 16;
 enum class PageCoding : std::uint32_t { stored = 0, zstd = 1 };
 
+/// A zstd level CodecParams::entropy_level may take: 0 (pages stored as they are) to
+/// kMaxEntropyLevel. The writer, the streaming encoder (before it allocates its buffers) and
+/// serialize_page each refuse any other.
+inline bool valid_entropy_level(int level) { return level >= 0 && level <= kMaxEntropyLevel; }
+
 /// A frame is kept where it saves at least this part of the payload (an eighth). Undoing it runs
 /// at about 1 GB/s, several times slower than reading the stored bytes: a frame saving 3-12 %
 /// (the EEG-like field's pages) tripled their load times, and fast playback found its next page
@@ -29,9 +34,10 @@ constexpr std::uint64_t kMinSavingPart = 8;
 /// The payload bytes a stored form's prefix (at `stored`, 16 bytes) declares.
 std::uint64_t declared_payload_bytes(const std::uint8_t* stored);
 
-/// Appends payload[0, bytes) in its stored form to `out`: the prefix, then a zstd frame at
-/// `level` where that saves an eighth, else the payload itself (always so at level 0).
-void append_coded_payload(const std::uint8_t* payload, std::uint64_t bytes, int level, std::vector<std::uint8_t>& out);
+/// Turns `page`, whose payload follows kCodingPrefixBytes of room at `prefix_at`, into its stored
+/// form: the prefix filled in, and the payload replaced by a zstd frame at `level` where that
+/// saves an eighth (never at level 0). A payload kept as it is is not copied.
+void code_payload_in_place(std::vector<std::uint8_t>& page, std::size_t prefix_at, int level);
 
 /// The payload of a stored form [stored, stored + stored_bytes): a pointer into `stored` or into
 /// `scratch` (grown as needed, never shrunk), and its size in `bytes`. A prefix that declares an

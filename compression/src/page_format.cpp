@@ -174,10 +174,12 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   if (std::uint32_t(p.method) > max_method_of_version(format_version) || format_version > std::uint32_t(kContainerFormatVersion))
     throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) + " cannot hold a page of method " +
                                                  std::to_string(std::uint32_t(p.method)));
-  if (entropy_level < 0 || entropy_level > kMaxEntropyLevel)
+  if (!valid_entropy_level(entropy_level))
     throw Error(ErrorCode::invalid_argument, "entropy level " + std::to_string(entropy_level) + " is outside 0.." +
                                                  std::to_string(kMaxEntropyLevel));
-  std::vector<std::uint8_t> bytes(PageHeader::kBytes, 0);
+  // From version 6 the payload follows room for its coding prefix, filled in below.
+  const bool coded = format_version >= kFirstCodedVersion;
+  std::vector<std::uint8_t> bytes(PageHeader::kBytes + (coded ? kCodingPrefixBytes : 0), 0);
   ByteWriter w(bytes);
   w.put_array(p.times);
   if (has_vq(p.method)) {
@@ -231,11 +233,7 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
       w.append(rows.data(), words * 4);
     }
   }
-  if (format_version >= kFirstCodedVersion) {
-    std::vector<std::uint8_t> coded(PageHeader::kBytes, 0);
-    append_coded_payload(bytes.data() + PageHeader::kBytes, bytes.size() - PageHeader::kBytes, entropy_level, coded);
-    bytes.swap(coded);
-  }
+  if (coded) code_payload_in_place(bytes, PageHeader::kBytes, entropy_level);
   const std::uint64_t payload_bytes = bytes.size() - PageHeader::kBytes;
   std::uint8_t* h = bytes.data();
   auto at = [&](std::size_t offset, const auto& value) { std::memcpy(h + offset, &value, sizeof(value)); };

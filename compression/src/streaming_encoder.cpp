@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "huge_pages.h"
+#include "page_coding.h"
 #include "page_methods.h"
 #include "penumbra/core/error.h"
 
@@ -42,7 +43,7 @@ StreamingEncoder::StreamingEncoder(StreamingOptions options) : m_options(std::mo
           "StreamingEncoder: codebook_size must be 2..256, got " + std::to_string(c.codebook_size));
   require(c.bound.kind == BoundKind::none || (std::isfinite(c.bound.value) && c.bound.value > 0),
           "StreamingEncoder: error bound must be positive and finite");
-  require(c.entropy_level >= 0 && c.entropy_level <= kMaxEntropyLevel,
+  require(detail::valid_entropy_level(c.entropy_level),
           "StreamingEncoder: entropy_level must be 0.." + std::to_string(kMaxEntropyLevel) + ", got " +
               std::to_string(c.entropy_level));
   const std::uint64_t budget = m_options.memory_budget_bytes;
