@@ -2,6 +2,7 @@
 #include "penumbra/compression/pager.h"
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -222,13 +223,9 @@ void Pager::read_step(std::uint64_t step, float* out) {
   // next page was still loading when playback reached it in 12 of 18 playbacks of that field's
   // three lines; decoding alone meanwhile, in none of 90 playbacks of five fields, at the same
   // playback speed.
-  const std::uint32_t t = std::uint32_t(step - data->first_step);
-  if (load_running) {
-    SerialScope serial;
-    m_cursor.decode(data, t, out);
-  } else {
-    m_cursor.decode(data, t, out);
-  }
+  std::optional<SerialScope> serial;
+  if (load_running) serial.emplace();
+  m_cursor.decode(data, std::uint32_t(step - data->first_step), out);
 }
 
 }  // namespace penumbra::compression
