@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # bench/run.sh NAME -- builds what benchmark NAME needs and runs it, from the repository root.
 # Prints one JSON object per line on stdout (build logs and progress go to stderr) and keeps a
 # copy in build-bench/NAME.jsonl. Benchmarks:
@@ -37,7 +38,7 @@ build_targets() {
   cmake --build "$build" --parallel "$(nproc)" --target "$@" >&2
 }
 
-# The graded non-convex holeblock of bench/scenes/holeblock.geo (shared/data/MESHES.md, Route A):
+# The graded non-convex holeblock of bench/scenes/holeblock.geo (gmsh HXT, as bench/README.md describes):
 # holeblock_mesh [NAME H], by default holeblock-1m at h = 0.156 (about 1M tets); holeblock-100k is
 # h = 0.34 (about 98K tets). Generated once, then cached in build-bench/data.
 holeblock_mesh() {

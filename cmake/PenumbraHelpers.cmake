@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # pnb_add_module(NAME SOURCES...): a library target penumbra_NAME with aliases Penumbra::NAME and
 # penumbra::NAME, public headers in NAME/include, exported as NAME.
 function(pnb_add_module name dir)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 include(CMakePackageConfigHelpers)
 set(PNB_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/Penumbra)
 install(EXPORT PenumbraTargets NAMESPACE Penumbra:: DESTINATION ${PNB_CMAKE_DIR})

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # scripts/clang_check.sh [BUILD_DIR] -- builds everything with clang and runs the whole test
 # suite. Solvers are often built with LLVM-based compilers and build Penumbra with the same one;
 # the vector kernels' target regions are spelled for each compiler (compression/src/

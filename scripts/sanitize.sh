@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # scripts/sanitize.sh [BUILD_DIR] -- builds everything with AddressSanitizer (leaks included) and
 # UndefinedBehaviorSanitizer (float-to-integer overflow included) and runs the whole test suite
 # under them; any report fails the run.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs every build, test and benchmark dependency on Debian 12 (bookworm) with apt.
 # Idempotent: packages already present are skipped quickly.
 set -euo pipefail

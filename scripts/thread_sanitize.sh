@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # scripts/thread_sanitize.sh [BUILD_DIR] -- builds the tests of the code that runs on several
 # threads at once with ThreadSanitizer and runs them; any data race or lock-order report fails
 # the run. That code: the thread pool, the pager's background loads and its page recycling, the

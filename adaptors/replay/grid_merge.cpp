@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/grid_merge.cpp -- multi-block reader output merged into one grid
 #include "grid_merge.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/grid_merge.h -- one vtkUnstructuredGrid out of a reader's multi-block output
 #pragma once
 #include <vtkSmartPointer.h>

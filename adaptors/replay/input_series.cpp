@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/input_series.cpp -- readers for the formats penumbra-replay accepts
 #include "input_series.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/input_series.h -- the time steps of a replay INPUT, one grid per step
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/main.cpp -- penumbra-replay CONFIG INPUT [--steps a:b] [--quiet]
 #include <iostream>
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/netcdf_size.cpp -- the size a classic netCDF file must have, from its header
 //
 // netCDF reads records past the end of a truncated file as zeros without reporting anything,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/netcdf_size.h -- detects truncated classic netCDF (Exodus II) files
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/replay.cpp -- penumbra-replay's driver: files -> adaptor -> C API
 #include "replay.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/replay.h -- penumbra-replay: drive the C API from files as if a solver ran
 #pragma once
 #include <iosfwd>

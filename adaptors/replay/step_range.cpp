@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/step_range.cpp -- the --steps selection
 #include "step_range.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/step_range.h -- penumbra-replay's usage errors and its --steps selection
 #pragma once
 #include <cstddef>

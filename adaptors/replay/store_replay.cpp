@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/store_replay.cpp -- stored mesh and fields -> C API, step by step
 #include "store_replay.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/replay/store_replay.h -- penumbra-replay over a run's compressed history
 #pragma once
 #include <cstddef>

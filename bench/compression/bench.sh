@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # usage: compression  (Penumbra's time-window VQ vs ZFP, fpzip, temporal delta + zstd: smooth, shock, EEG-like ~100K x 128, and mug.e)
 # Sourced by bench/run.sh, which provides build_targets, log, $root, $build and $data.
 # Environment: PNB_BENCH_COMPRESSION_FIELDS (default "smooth shock shock-nonuniform eeg mug"),
@@ -9,7 +10,7 @@ compression_export_mug() {
   [ -f "$out/mug-convected.f32" ] && return 0
   mkdir -p "$out"
   log "compression: exporting mug.e time steps with python3-vtk9"
-  /usr/bin/python3 "$root/bench/compression/export_mug.py" "$root/../shared/data/mug.e" "$out" >&2 \
+  /usr/bin/python3 "$root/bench/compression/export_mug.py" "$root/tests/data/mug.e" "$out" >&2 \
     || { log "exporting mug.e failed (python3-vtk9 missing? run scripts/setup.sh)"; exit 1; }
 }
 

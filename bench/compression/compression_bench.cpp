@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/compression/compression_bench.cpp -- Penumbra's time-window VQ codec against ZFP,
 // fpzip and temporal delta + zstd on one field; prints one JSON object per line.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/compression/decode_ab.cpp -- whole-window decode of one field by several builds of
 // libpenumbra_compression.so in one process, round by round beside a memcpy of the same bytes;
 // prints one JSON object per build.

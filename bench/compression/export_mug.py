@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Exports the point fields of shared/data/mug.e (MOOSE, 21 time steps) as raw arrays.
+# SPDX-License-Identifier: BSD-3-Clause
+"""Exports the point fields of tests/data/mug.e (MOOSE, 21 time steps) as raw arrays.
 
 usage: export_mug.py MUG_E OUT_DIR
 Writes OUT_DIR/mug-FIELD.f32 for each point field: uint64 vertices, uint64 steps,

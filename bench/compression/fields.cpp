@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/compression/fields.cpp
 #include "fields.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/compression/fields.h -- the time-varying fields the compression benchmark runs on.
 #pragma once
 #include <cstdint>

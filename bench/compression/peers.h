@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/compression/peers.h -- the peer codecs, each on the [time x vertex] float array.
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # usage: gpu     (Penumbra GPU ray caster via headless EGL vs its CPU path vs vtkProjectedTetrahedraMapper, 512x512, ~1M tets)
 # Without a GPU the GPU path runs on Mesa's llvmpipe, as VTK does under Xvfb.
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $root, $build, $data

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Reads the JSON lines of the gpu benchmark (penumbra-gpu, penumbra-cpu, vtk-projected-tetra) on
 stdin and prints them again, each Penumbra line annotated with its speed ratios to its peers."""
 import json

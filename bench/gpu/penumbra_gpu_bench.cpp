@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/gpu/penumbra_gpu_bench.cpp -- times Penumbra's GPU ray caster (EGL + OpenGL compute)
 // and its CPU ray caster on one benchmark scene, in the same run, with their errors against the
 // double-precision reference and the GPU image's difference from the CPU image.

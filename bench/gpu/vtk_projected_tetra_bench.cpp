@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/gpu/vtk_projected_tetra_bench.cpp -- renders a benchmark scene with VTK 9's
 // vtkProjectedTetrahedraMapper (cell projection through OpenGL rasterisation, the classic GPU
 // peer of a ray caster) and measures its error against Penumbra's cached reference image.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # usage: light   (two-level light volume, Shih et al. Table 2 style: level-0 16^3..256^3 x none/level0-only/two-level, ~1M tets, + light-1m, light-budget)
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $root, $build, $data
 # and $frames. Environment: PNB_BENCH_LIGHT_SCENE (holeblock-1m, the default, or grid-aligned),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/light/light_bench.cpp -- the two-level light volume in the style of Shih et al.'s Table 2
 //
 // Usage: pnb_bench_light --scene NAME --data-dir DIR [--levels "16 32 64 128 256"] [--samples N]

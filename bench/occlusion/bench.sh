@@ -1,7 +1,8 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # usage: occlusion  (cone-traced directional occlusion and shadows: emission-absorption, AO with splits 1/3/7 per point and in object space, AO + shadows; ms per frame beside CIELAB Delta E against Monte Carlo images)
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $build, $data and
 # $frames. Environment: PNB_BENCH_OCC_SCENES (default "hexblock-hole plate-shadow disk-out-ref holeblock-100k
-# grid-aligned"; disk-out-ref is the hex mesh ../shared/data/disk_out_ref.ex2; holeblock-100k (generated
+# grid-aligned"; disk-out-ref is the hex mesh tests/data/disk_out_ref.ex2; holeblock-100k (generated
 # with gmsh on first use) the graded hole-block tet mesh small enough for Monte Carlo; holeblock-1m
 # is generated with gmsh on first use), PNB_BENCH_OCC_SIZE (WxH, default 512x512),
 # PNB_BENCH_OCC_GRID (extinction grid nodes along the longest axis, default 128),
@@ -24,7 +25,7 @@ bench_occlusion() {
     [ "$scene" = holeblock-1m ] && holeblock_mesh
     [ "$scene" = holeblock-100k ] && holeblock_mesh holeblock-100k 0.34
     log "occlusion/$scene: Monte Carlo light fields first (small scenes only), then every mode"
-    "$bin/pnb_bench_occlusion" --scene "$scene" --data-dir "$data" --shared-data "$root/../shared/data" --frames "$frames" \
+    "$bin/pnb_bench_occlusion" --scene "$scene" --data-dir "$data" --test-data "$root/tests/data" --frames "$frames" \
       --size "${PNB_BENCH_OCC_SIZE:-512x512}" --grid "${PNB_BENCH_OCC_GRID:-128}" \
       --preillum "${PNB_BENCH_OCC_PREILLUM:-64}" --mc-max-points "${PNB_BENCH_OCC_MC_MAX_POINTS:-60000}" \
       --alpha "${PNB_BENCH_OCC_ALPHA:-1}" --weight "${PNB_BENCH_OCC_WEIGHT:-mean}" \

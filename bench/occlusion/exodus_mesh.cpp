@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/occlusion/exodus_mesh.cpp -- hexahedra and a nodal field from an Exodus II file
 #include "exodus_mesh.h"
 

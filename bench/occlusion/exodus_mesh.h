@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/occlusion/exodus_mesh.h -- one element block of hexahedra and a nodal field from an
-// Exodus II file (for the occlusion scene on ../shared/data/disk_out_ref.ex2)
+// Exodus II file (for the occlusion scene on tests/data/disk_out_ref.ex2)
 #pragma once
 #include <cstdint>
 #include <string>

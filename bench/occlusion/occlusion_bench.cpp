@@ -1,14 +1,15 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/occlusion/occlusion_bench.cpp -- cone-traced directional occlusion and shadows: speed of a
 // frame beside its error against the Monte Carlo image (thesis tables 3.3-3.6 in spirit).
 //
-// Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--shared-data DIR] [--frames N] [--size WxH]
+// Usage: pnb_bench_occlusion --scene NAME [--data-dir DIR] [--test-data DIR] [--frames N] [--size WxH]
 //          [--grid N] [--preillum N] [--mc-max-points N] [--hex-n N] [--alpha A] [--weight mean|thesis]
 //          [--level continuous|thesis]
 //          [--pyramid opacity|extinction|step_opacity] [--image-space on|off] [--gpu on|off]
 //          [--modes all|shadow]  (shadow: only ao+shadow and the hard-shadow lines)
 // Scenes: hexblock-hole (procedural hexahedra with a through-hole, split into tets on
 // preparation), plate-shadow (hexahedra, an opaque plate over fog: hard shadow edges),
-// disk-out-ref (the hexahedra of ../shared/data/disk_out_ref.ex2, --shared-data DIR),
+// disk-out-ref (the hexahedra of tests/data/disk_out_ref.ex2, --test-data DIR),
 // grid-aligned and holeblock-1m (bench/render's scenes, about 1M tets), holeblock-100k (the same
 // graded hole-block at about 98K tets, small enough for Monte Carlo).
 //
@@ -141,11 +142,11 @@ Setup hexblock(int n, int width, int height, bool plate) {
   return s;
 }
 
-// disk-out-ref: ParaView's "disk_out_ref" example from ../shared/data (7472 hexahedra of a
+// disk-out-ref: ParaView's "disk_out_ref" example from tests/data (7472 hexahedra of a
 // cylindrical reactor around a spinning disk, split into tets on preparation), its temperature
 // normalised to [0, 1] through a semi-transparent transfer function, seen obliquely.
-Setup disk_out_ref(const std::string& shared_dir, int width, int height) {
-  const pb::HexMesh hm = pb::read_exodus_hexes(shared_dir + "/disk_out_ref.ex2", "Temp");
+Setup disk_out_ref(const std::string& test_data_dir, int width, int height) {
+  const pb::HexMesh hm = pb::read_exodus_hexes(test_data_dir + "/disk_out_ref.ex2", "Temp");
   static const std::uint8_t hexahedron = 12;
   penumbra::MeshView view;
   view.points = {reinterpret_cast<const std::byte*>(hm.points.data()), hm.points.size() / 3, 3 * sizeof(double)};
@@ -227,7 +228,7 @@ ImageDiff compare(const pr::Image& a, const pr::Image& b, const float background
 int run(int argc, char** argv) {
   const std::string name = pb::option(argc, argv, "scene", "hexblock-hole");
   const std::string data_dir = pb::option(argc, argv, "data-dir", "");
-  const std::string shared_dir = pb::option(argc, argv, "shared-data", "../shared/data");
+  const std::string test_data_dir = pb::option(argc, argv, "test-data", "tests/data");
   const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
   const std::string size = pb::option(argc, argv, "size", "512x512");
   const int grid_res = std::stoi(pb::option(argc, argv, "grid", "128"));
@@ -275,7 +276,7 @@ int run(int argc, char** argv) {
   penumbra::require(frames >= 1, "pnb_bench_occlusion: --frames must be >= 1");
 
   const Setup s = name == "hexblock-hole" || name == "plate-shadow" ? hexblock(hex_n, width, height, name == "plate-shadow")
-                  : name == "disk-out-ref"                            ? disk_out_ref(shared_dir, width, height)
+                  : name == "disk-out-ref"                            ? disk_out_ref(test_data_dir, width, height)
                                                                       : bench_scene(name, data_dir, width, height);
   const pr::TetMesh& mesh = *s.mesh;
   const pr::CpuRayCaster caster(s.mesh);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/bench_util.h -- timing and output helpers shared by the benchmark programs
 #pragma once
 #include <algorithm>

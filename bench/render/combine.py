@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Reads the JSON lines of one scene (Penumbra first, then the VTK mappers) on stdin and prints
 them again, the Penumbra line annotated with its speed-up over the fastest VTK mapper."""
 import json

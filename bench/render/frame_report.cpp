@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/frame_report.cpp -- reference images and shared frame-line keys
 #include "frame_report.h"
 

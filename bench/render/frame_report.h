@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/frame_report.h -- reference images and the JSON keys every frame benchmark shares
 #pragma once
 #include <nlohmann/json.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/penumbra_render_bench.cpp -- times Penumbra's CPU ray caster on a benchmark scene
 // and measures its error against the double-precision reference renderer.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/scene.cpp -- benchmark scenes: meshes, analytic fields, transfer function, cameras
 #include "scene.h"
 

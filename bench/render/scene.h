@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/scene.h -- the benchmark scenes shared by the Penumbra and the VTK programs
 #pragma once
 #include <cstdint>

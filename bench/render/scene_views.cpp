@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/scene_views.cpp -- a benchmark scene as Penumbra's inputs
 #include "scene_views.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/scene_views.h -- a benchmark scene as Penumbra's inputs
 #pragma once
 #include "penumbra/core/mesh_view.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/vtk_render_bench.cpp -- renders a benchmark scene with VTK 9's unstructured-grid
 // volume mappers (vtkUnstructuredGridVolumeRayCastMapper, vtkUnstructuredGridVolumeZSweepMapper)
 // and measures their error against Penumbra's cached double-precision reference image.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/vtk_scene.cpp -- a benchmark scene as a vtkUnstructuredGrid
 #include "vtk_scene.h"
 

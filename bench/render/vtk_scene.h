@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/vtk_scene.h -- a benchmark scene as a vtkUnstructuredGrid for VTK's mappers
 #pragma once
 #include <vtkSmartPointer.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/vtk_window.cpp -- a VTK render window for a benchmark scene, and its read-back
 #include "vtk_window.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // bench/render/vtk_window.h -- a VTK render window for a benchmark scene, and its read-back
 #pragma once
 #include <vtkAbstractVolumeMapper.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // holeblock.geo -- non-convex benchmark domain (gmsh >= 4.8, OpenCASCADE kernel): an L-shaped
 // 4 x 2 x 1 block with a cylindrical through-hole and a closed spherical void, cells graded
 // from h/ratio next to those features up to h far from them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/aligned_lbg.cpp
 #include "aligned_lbg.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/aligned_lbg.h -- LBG over partially observed vectors (private).
 //
 // Shift-aligned VQ places each vertex-window of n steps inside a longer frame of D = 2W - 1

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/bit_blocks_builder.cpp
 #include "bit_blocks_builder.h"
 

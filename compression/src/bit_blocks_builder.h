@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/bit_blocks_builder.h -- assembles BitBlocks from per-vertex encoders (private).
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/bit_io.h -- LSB-first bit packing for BitBlocks payloads (private).
 #pragma once
 #include <bit>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/byte_io.h -- little-endian field (de)serialisation with bounds checks (private).
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/codec_params.cpp
 #include "penumbra/compression/codec_params.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/compressed_field.cpp -- opens a field file; checks header, index and pages.
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/crc32.cpp
 #include "crc32.h"
 

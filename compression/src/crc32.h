@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/crc32.h -- CRC-32 (IEEE 802.3 polynomial), slice-by-8 (private).
 #pragma once
 #include <cstddef>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/cursor_state.h -- what a StepCursor keeps per vertex between steps (private).
 //
 // Sequential playback of a page with bit blocks (residual or predictive) reads value index i

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/dot_rows.h -- the inner loops of the nearest-entry searches (private): dot
 // products of four vectors with every entry of a transposed codebook, and the lowest score.
 #pragma once

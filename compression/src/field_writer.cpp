@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/field_writer.cpp -- writes a field file (header, pages, index), atomically.
 #include <cerrno>
 #include <cstring>

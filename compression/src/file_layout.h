@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/file_layout.h -- file header and index trailer of a field file (private).
 //
 //   header   "PNBFIELD", u32 version, u32 header bytes, u64 vertices, u32 window,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/huge_pages.h -- large arrays on transparent huge pages, faulted in ahead of use (private).
 #pragma once
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks.h -- predictive_lanes pages: the predictive coder's integers in
 // blocks of 16 vertices (private).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_avx2.cpp -- the AVX2 decoders of predictive_lanes pages, for CPUs
 // without AVX-512: each block of 16 lanes as two vectors of 8, bit-identical to lane_block_step.
 #include <immintrin.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_checks.cpp -- a predictive_lanes page's tables checked value by
 // value, and the block offsets derived from them.
 #include <bit>

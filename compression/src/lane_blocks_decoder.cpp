@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_decoder.cpp -- decoders of predictive_lanes pages: a scalar one
 // that every path can use, and AVX-512 window and cursor decoders that are bit-identical to it
 // (the AVX2 ones are in lane_blocks_avx2.cpp).

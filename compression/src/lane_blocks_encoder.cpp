@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_encoder.cpp -- the predictive coder's integers written as lane
 // blocks (lane_blocks.h): chunks of blocks in parallel, then their columns joined at bit offsets.
 #include <algorithm>

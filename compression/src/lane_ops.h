@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_ops.h -- the AVX2 building blocks the lane decoders share (private):
 // 8 lanes loaded, widened or stored. Functions carry the AVX2 target themselves, so callers
 // compile without -mavx2 and choose them at run time (section_lanes.h: lanes_active).

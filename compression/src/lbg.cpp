@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lbg.cpp -- nearest-entry search and LBG codebook training.
 #include "penumbra/compression/lbg.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lbg_split.h -- the splitting step shared by the two LBG trainers (private)
 #pragma once
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/page_checks.cpp -- a page's contents checked value by value.
 #include "page_checks.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/page_coding.cpp
 #include "page_coding.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/page_coding.h -- the lossless stage over a page's payload (format version 6 on;
 // private).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/page_format.h -- one window as one page of bytes, and back (private).
 //
 // Payload, after the 64-byte header (from version 6 after its coding prefix, page_coding.h), in

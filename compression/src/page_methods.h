@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/page_methods.h -- what each PageMethod stores (private).
 #pragma once
 #include "penumbra/compression/codec_params.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/pager.cpp -- current + next page resident, next page prefetched in background.
 #include "penumbra/compression/pager.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/predictive_layout.h -- bit layout of one predictive vertex-window (private).
 //
 // A vertex-window of the predictive coder holds integers k_t (value = lo + k_t * step):

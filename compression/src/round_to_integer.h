@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/round_to_integer.h -- a quantiser's rounding without a library call (private).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/section_lanes.cpp
 #include "section_lanes.h"
 

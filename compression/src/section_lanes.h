@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/section_lanes.h -- decodes the bit-packed sections of 8 neighbouring
 // vertices at once, one AVX2 vector lane each, for residual and predictive pages (private).
 //

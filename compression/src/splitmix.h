@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/splitmix.h -- SplitMix64, the encoder's deterministic random numbers (private)
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/step_base.h -- the VQ part of one step of a page (private), shared by
 // decode_step and StepCursor, which add a residual on top of it.
 #pragma once

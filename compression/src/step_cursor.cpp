@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/step_cursor.cpp -- StepCursor: O(1) sequential steps of pages with bit blocks.
 #include <string>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/streaming_encoder.cpp -- in-situ encoder: window buffers + background thread.
 #include "penumbra/compression/streaming_encoder.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/target_region.h -- functions compiled for instruction sets beyond the build's
 // baseline (private): a region of them, with GCC and with clang,
 //

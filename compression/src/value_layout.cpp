@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/value_layout.cpp
 #include "value_layout.h"
 

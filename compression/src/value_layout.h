@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/value_layout.h -- how one vertex-window's integers are bit-packed (private).
 //
 // A vertex-window stores `count` unsigned (zigzag) integers z_i under a 4-bit code:

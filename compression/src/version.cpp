@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/version.cpp
 #include "penumbra/compression/version.h"
 

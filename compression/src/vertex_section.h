@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/vertex_section.h -- one vertex's bits in a page's BitBlocks (private).
 //   vq_residual, vq_aligned_residual: values (value_layout.h) of zigzag(q_t), t < n
 //   predictive:  1-bit predictor, k_0 (first_width bits), values of the n-1 prediction errors

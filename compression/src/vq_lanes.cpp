@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/vq_lanes.cpp
 #include "vq_lanes.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/vq_lanes.h -- the VQ part of a decode, the table lookups done 8 vertices at a
 // time with AVX2 gathers where the CPU has them (private).
 //

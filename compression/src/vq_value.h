@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/vq_value.h -- the one definition of how a VQ value is rebuilt (private).
 // Encoder and decoders both call these, so the residual the encoder quantises is measured
 // against exactly the floats the decoder produces (the bound then holds bit for bit).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/window_decoder.cpp -- decodes a page: one step, the whole window, or one vertex.
 #include <algorithm>
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/src/window_encoder.cpp -- encodes one window: VQ (mean + D8 + D_W, closed loop),
 // optional quantised residual, or the error-bounded predictive coder for VQ-poor windows.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/src/field_view.cpp
 #include "penumbra/core/field_view.h"
 

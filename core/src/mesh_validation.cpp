@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/src/mesh_validation.cpp
 #include "penumbra/core/mesh_validation.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/src/mesh_view.cpp
 #include "penumbra/core/mesh_view.h"
 

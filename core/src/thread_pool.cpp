@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/src/thread_pool.cpp
 #include "penumbra/core/thread_pool.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // examples/advection_diffusion/main.cpp -- a small "solver" that links Penumbra through its C API.
 //
 // It builds a tet mesh of an L-shaped slab with a square through-hole (a non-convex domain:

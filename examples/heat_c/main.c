@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* examples/heat_c/main.c -- a plain C99 "solver" using Penumbra's C API.
  *
  * Heat conduction in a block of hexahedra made of two materials: a heater in one corner warms

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs the build tree into a scratch prefix, then configures, builds and runs
 # examples/using-cmake against it. Run with: cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DLIBDIR=lib -P check_install.cmake
 foreach(v BUILD_DIR SOURCE_DIR WORK_DIR LIBDIR)

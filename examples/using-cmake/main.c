@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* examples/using-cmake/main.c -- proves the installed package links: prints the version and
  * checks that a bad config comes back as an error status, not an abort. */
 #include <stdio.h>

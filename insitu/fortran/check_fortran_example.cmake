@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs the Fortran mini-app into a fresh directory and checks that it wrote a Cinema database.
 file(REMOVE_RECURSE ${OUT})
 execute_process(COMMAND ${EXE} ${OUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 ! insitu/fortran/heat_fortran.f90 -- a Fortran caller: explicit heat diffusion on a hex grid,
 ! rendered through the C API. Usage: penumbra-example-fortran [OUTPUT_DIR]
 program heat_fortran

@@ -1,3 +1,4 @@
+! SPDX-License-Identifier: BSD-3-Clause
 ! insitu/fortran/penumbra.f90 -- Fortran 2003 bindings to Penumbra's C API (penumbra.h).
 ! The same symbols as the C API, bound with bind(C); there is no second implementation.
 module penumbra

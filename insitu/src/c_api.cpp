@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/c_api.cpp -- the C API: argument checks, conversion to views, and the guard that
 // keeps every exception out of the host program
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/cinema_database.cpp -- data.csv reading, atomic rewriting, image naming
 #include "cinema_database.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/cinema_database.h -- Cinema spec D image database, kill-safe
 #pragma once
 #include <string>

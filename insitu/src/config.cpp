@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/config.cpp -- JSON config parsing; every error names the offending key path
 #include "config.h"
 

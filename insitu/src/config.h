@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/config.h -- the runtime's JSON configuration, parsed and checked
 #pragma once
 #include <array>

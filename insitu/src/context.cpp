@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/context.cpp -- per-step pipeline: fields -> scalars -> images -> database
 #include "context.h"
 

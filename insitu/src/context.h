@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/context.h -- the in-situ runtime behind the C API
 #pragma once
 #include <cstdint>

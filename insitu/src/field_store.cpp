@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/field_store.cpp -- segments, per-field streaming encoders and the step list
 #include "field_store.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/field_store.h -- the run's compressed field history (config "store")
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/occlusion_lighting.cpp -- cone-traced occlusion and shadows as a per-point light field
 #include "occlusion_lighting.h"
 

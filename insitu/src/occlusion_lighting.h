@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/occlusion_lighting.h -- the light field of lighting model "occlusion": directional
 // ambient occlusion towards the camera times cone-traced shadows from the lights
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/stored_mesh.cpp -- the store's mesh file
 #include "stored_mesh.h"
 

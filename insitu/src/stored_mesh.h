@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/stored_mesh.h -- a published mesh written to and read from a file of its own
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/stored_run.cpp -- a store segment opened for re-rendering
 #include "penumbra/insitu/stored_run.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/trigger.h -- decides which execute() calls render
 #pragma once
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/version.cpp
 #include "penumbra/penumbra.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/cone_trace.comp -- one Gaussian cone per invocation, as
 // render/src/occlusion/cone_tracer.cpp (ConeTracer::transmittance) and occlusion_shading.cpp
 //

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # render/shaders/embed_shader.cmake -- writes a GLSL file into a C++ source as a raw string.
 # cmake -DINPUT=shader.comp -DOUTPUT=file.cpp -DSYMBOL=kName -P embed_shader.cmake
 file(READ "${INPUT}" source)

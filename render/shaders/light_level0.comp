@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/light_level0.comp -- one wavefront of the level-0 upwind sweep (level0_sweep.cpp)
 //
 // Node (i, j, k) depends on its upwind neighbours (i - s_i, j, k) ..., s_a the sign of its index

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/light_level1.comp -- a semi-Lagrangian pass of level 1 (level1_solve.cpp)
 //
 // u_mode 0: one slab group of the vertex order. Each invocation traces back from its vertex by

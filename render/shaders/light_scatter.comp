@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/light_scatter.comp -- one Chebyshev-accelerated Jacobi iteration of the implicit
 // diffusion step (eq. 12)
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/pyramid_filter.comp -- one pass of the extinction pyramid's construction, as
 // render/src/occlusion/extinction_pyramid.cpp: a separable Gaussian pass along one axis (zeros
 // beyond the input, never clamp-to-edge), or the per-value conversion to opacity and back.

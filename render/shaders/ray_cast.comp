@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/shaders/ray_cast.comp -- one ray per invocation, as render/src/cpu_ray_caster.cpp
 //
 // The same algorithm as the CPU caster, in float32: every boundary entry along the ray from a

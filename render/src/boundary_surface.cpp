@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/boundary_surface.cpp
 #include "penumbra/render/boundary_surface.h"
 

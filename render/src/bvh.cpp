@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/bvh.cpp -- BVH construction
 #include "bvh.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/bvh.h -- bounding volume hierarchy over boxes, for "every item along a line" queries
 #pragma once
 #include <cstdint>

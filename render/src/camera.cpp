@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/camera.cpp -- perspective pinhole camera, look-at and Cinema orbits
 #include "penumbra/render/camera.h"
 

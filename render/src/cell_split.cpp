@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/cell_split.cpp
 #include "cell_split.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/cell_split.h -- conforming split of VTK volume cells into tets
 #pragma once
 #include <array>

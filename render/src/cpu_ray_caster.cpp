@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/cpu_ray_caster.cpp -- boundary entries by screen bins (or a BVH), tet walk by Plücker
 // signs, several rays in flight, exact segment integration
 #include "penumbra/render/cpu_ray_caster.h"

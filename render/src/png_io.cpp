@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/png_io.cpp -- PNG encode/decode and image comparison helpers
 #include <png.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/ray_frame.h -- ray-centred projection and consistent edge orientation tests
 //
 // Every mesh point is projected onto the plane orthogonal to the ray (coordinates along u and v,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/reference_renderer.cpp -- double-precision ground truth, independent of adjacency
 //
 // Per ray: every tet the ray crosses is found (a BVH over all tets for images, all tets for a

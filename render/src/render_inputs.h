@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/render_inputs.h -- argument checks shared by the CPU, GPU and reference renderers
 #pragma once
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/screen_frame.cpp -- screen-space points and boundary-face bins of one frame
 #include "screen_frame.h"
 

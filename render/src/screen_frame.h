@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/screen_frame.h -- the per-frame screen-space data of ScreenGeometry (see
 // walk_geometry.h): projected points and boundary faces binned by screen tile
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/segment_integral.cpp -- special functions behind the exact segment integral
 #include "segment_integral.h"
 

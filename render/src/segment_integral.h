@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/segment_integral.h -- exact emission-absorption integral of one linear segment
 //
 // Along a segment of length L where extinction tau and colour c are both linear in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/shade_context.cpp -- per-tet normals and the light field for shaded frames
 #include "shade_context.h"
 

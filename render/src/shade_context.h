@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/shade_context.h -- per-frame shading state of the CPU walk (see
 // penumbra/render/shading.h)
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/shading.cpp -- checks of the shading options
 #include "penumbra/render/shading.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tet_clip.cpp -- a line clipped against one tet
 #include "tet_clip.h"
 

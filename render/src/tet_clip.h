@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tet_clip.h -- a line clipped against one tet, for the double-precision references
 // (independent of adjacency and of the walk)
 #pragma once

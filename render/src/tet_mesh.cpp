@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tet_mesh.cpp -- from a solver's MeshView to a render-ready TetMesh
 #include "penumbra/render/tet_mesh.h"
 

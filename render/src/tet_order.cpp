@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tet_order.cpp -- Morton order of tet centroids
 #include "tet_order.h"
 

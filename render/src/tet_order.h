@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tet_order.h -- cache-friendly orders of a mesh's tets and points
 #pragma once
 #include <cstdint>

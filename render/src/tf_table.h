@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/tf_table.h -- transfer function as linear pieces, for exact segment integration
 #pragma once
 #include <algorithm>

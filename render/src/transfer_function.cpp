@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/transfer_function.cpp -- piecewise-linear colour and extinction
 #include "penumbra/render/transfer_function.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/walk_geometry.h -- how the walk sees the mesh from one ray: projected points and
 // interpolation along the ray, per ray (any ray) or per frame (screen space)
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/walk_mesh.cpp -- walk records from a prepared mesh
 #include "walk_mesh.h"
 

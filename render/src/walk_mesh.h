@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/walk_mesh.h -- the mesh as the CPU walk reads it
 #pragma once
 #include <cstdint>

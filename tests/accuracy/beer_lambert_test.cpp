@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Homogeneous tet blocks against Beer-Lambert's closed form.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The fast renderer against the double-precision reference on smooth fields.
 #include <gtest/gtest.h>
 

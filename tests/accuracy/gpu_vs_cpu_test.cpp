@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/accuracy/gpu_vs_cpu_test.cpp -- the GPU ray caster (llvmpipe in CI) against the CPU one
 //
 // Both run the same algorithm; the GPU in float32, the CPU in float64. Tolerances:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A block with a square through-hole: rays through the hole see the background, rays across it
 // leave and re-enter the mesh.
 #include <gtest/gtest.h>

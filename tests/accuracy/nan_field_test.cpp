@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // NaN vertex values (cells with a NaN vertex are empty) and constant fields.
 #include <gtest/gtest.h>
 

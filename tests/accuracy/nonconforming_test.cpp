@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/accuracy/nonconforming_test.cpp -- meshes with hanging nodes (T-junctions)
 #include <gtest/gtest.h>
 

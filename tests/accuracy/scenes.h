@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/accuracy/scenes.h -- shared set-up for the ray-caster accuracy tests
 #pragma once
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A frame whose camera sees the whole mesh in front of it walks with per-frame screen-space
 // projections (walk_geometry.h); a single traced ray always projects per ray. Both must give the
 // same picture, and a frame with the eye inside the mesh must fall back to per-ray projection.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Shading of the emitted colour (penumbra/render/shading.h) against closed forms.
 #include <gtest/gtest.h>
 

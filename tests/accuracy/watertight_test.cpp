@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Watertight traversal: rays exactly through vertices, along edges and in face planes.
 #include <gtest/gtest.h>
 

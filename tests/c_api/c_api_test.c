@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* tests/c_api/c_api_test.c -- the C API from C99: every error path returns a status and a
  * message, never aborts. Prints "N passed, M failed" and exits non-zero on any failure. */
 #define _XOPEN_SOURCE 700

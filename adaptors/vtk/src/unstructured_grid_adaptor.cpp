@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/vtk/src/unstructured_grid_adaptor.cpp -- vtkUnstructuredGrid -> pnb_mesh_desc / pnb_field_desc
 #include "penumbra/vtk/unstructured_grid_adaptor.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /* insitu/include/penumbra/penumbra.h -- Penumbra's C API for simulation codes (C99, Fortran via bind(C)).
  *
  * Typical time loop:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/egl_device_selection.cpp -- which EGL device the GPU backend uses (no EGL needed)
 #include <algorithm>
 #include <charconv>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/egl_loader.cpp -- dlopen of libEGL and device enumeration
 #include "egl_loader.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/egl_loader.h -- EGL entry points resolved at run time
 //
 // libEGL is opened with dlopen rather than linked, so that a program built with the GPU

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gl_api.cpp -- resolving the OpenGL entry points
 #include "gl_api.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gl_api.h -- the OpenGL 4.5 entry points the GPU backend uses, via eglGetProcAddress
 #pragma once
 #include <GL/glcorearb.h>

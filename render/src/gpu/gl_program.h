@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gl_program.h -- what every GPU feature's OpenGL half needs: compiling a compute
 // program with the driver's log in the error, and sizes in MiB for memory errors
 #pragma once

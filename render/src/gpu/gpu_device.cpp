@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_device.cpp -- a headless OpenGL 4.5 context on the chosen EGL device
 #include <cstdio>
 #include <cstdlib>

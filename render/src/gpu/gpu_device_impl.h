@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_device_impl.h -- the EGL context behind GpuDevice
 #pragma once
 #include <memory>

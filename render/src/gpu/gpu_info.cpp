@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_info.cpp -- descriptions of the GPU backend's state (with or without EGL)
 #include "penumbra/render/gpu_ray_caster.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_mesh_layout.cpp -- packing a TetMesh for the GPU ray caster
 #include "gpu_mesh_layout.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_mesh_layout.h -- a TetMesh packed into the shader storage buffers' layout
 #pragma once
 #include <array>

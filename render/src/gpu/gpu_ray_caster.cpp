@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_ray_caster.cpp -- buffers, uniforms and dispatch of the ray-casting shader
 #include "penumbra/render/gpu_ray_caster.h"
 

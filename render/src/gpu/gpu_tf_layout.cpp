@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_tf_layout.cpp -- transfer-function pieces and series coefficients for the shader
 #include "gpu_tf_layout.h"
 

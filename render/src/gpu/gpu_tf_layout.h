@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_tf_layout.h -- the transfer function as linear pieces for the shader
 #pragma once
 #include <vector>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/gpu/gpu_unavailable.cpp -- the GPU API in builds without EGL (PNB_ENABLE_EGL=OFF):
 // every entry point reports Error(backend_unavailable), so callers need no #ifdefs.
 #include "penumbra/core/error.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/crossing_arena.cpp -- blocks of walk crossings, handed out in spans
 #include "crossing_arena.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/crossing_arena.h -- storage for the crossings of one light's recorded walks
 #pragma once
 #include <cstddef>

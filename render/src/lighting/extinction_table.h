@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/extinction_table.h -- exact integral of extinction along a linear segment
 #pragma once
 #include <algorithm>

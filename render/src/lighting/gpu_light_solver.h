@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/gpu_light_solver.h -- the light-volume kernels on the GPU (OpenGL 4.5 compute)
 //
 // The same model as the CPU solve (see penumbra/render/light_volume.h), in float32 on the device:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/gpu_light_solver_unavailable.cpp -- the GPU light volume in builds without
 // EGL (PNB_ENABLE_EGL=OFF): constructing it reports Error(backend_unavailable).
 #include "gpu_light_solver.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level0_grid.cpp -- level-0 node location, resampling and interpolation
 #include "level0_grid.h"
 

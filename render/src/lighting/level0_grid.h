@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level0_grid.h -- the regular level-0 grid of the light volume
 #pragma once
 #include <array>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level0_sweep.cpp -- ordered upwind sweeps of the level-0 grid
 #include "level0_sweep.h"
 

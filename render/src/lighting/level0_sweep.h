@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level0_sweep.h -- steady-state upwind solve of eq. 4 on the level-0 grid
 #pragma once
 #include <vector>

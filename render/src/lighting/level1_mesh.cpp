@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_mesh.cpp -- point-to-tet and point-to-point adjacency, the walk records
 #include "level1_mesh.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_mesh.h -- what the level-1 solve needs to know about the tet mesh
 #pragma once
 #include <cstdint>

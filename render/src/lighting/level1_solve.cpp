@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_solve.cpp -- the tet walk and the ordered semi-Lagrangian passes
 #include "level1_solve.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_solve.h -- semi-Lagrangian steps (eq. 6-8) on the tet mesh
 #pragma once
 #include <array>

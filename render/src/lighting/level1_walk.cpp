@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_walk.cpp -- the level-1 walk by edge signs in the plane across the ray
 #include "level1_walk.h"
 

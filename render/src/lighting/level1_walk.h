@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/level1_walk.h -- the walk from a vertex towards the light through the tets
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/light_scattering.cpp -- Chebyshev-accelerated Jacobi diffusion of the light colour field
 #include "light_scattering.h"
 

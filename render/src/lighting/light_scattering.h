@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/light_scattering.h -- one implicit diffusion step of the light colour (eq. 12)
 #pragma once
 #include <array>

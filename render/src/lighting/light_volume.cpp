@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/light_volume.cpp -- Algorithm 1: incremental two-level light volume updates
 #include "penumbra/render/light_volume.h"
 

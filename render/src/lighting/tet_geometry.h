@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/tet_geometry.h -- small exact-as-possible tet helpers shared by the solver
 #pragma once
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/transmittance_reference.cpp -- double-precision transmittance to a light
 //
 // Independent of the solver: no adjacency walk, no level-0 grid and no ExtinctionTable. The ray

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/cone_monte_carlo.cpp -- ground truth for one cone (thesis eq. 3-6, 3-7)
 //
 // Directions are cosine-weighted within the aperture: sin^2(angle) uniform in [0, sin^2 theta]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/cone_tracer.cpp -- Gaussian cone tracing (thesis sec. 3.2.2-3.2.4, app. A)
 //
 // The sample schedule (distance, level and blend, cone count, trapezoid weight, section weight) depends only

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/extinction_grid.cpp -- the transfer function's extinction on a regular grid
 //
 // The node location and the resampling are the light volume's level-0 grid (one implementation

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/extinction_pyramid.cpp -- Gaussian mip pyramid of extinction
 //
 // Every level is a lattice lo + n * spacing_l (spacing_l = 2^l spacing of the grid), n running

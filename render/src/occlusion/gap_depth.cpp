@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gap_depth.cpp -- exact optical depth over a shadow cone's initial gap
 //
 // The segment is clipped against every tet a BVH over the tets reports (the clip of the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gpu_occlusion_unavailable.cpp -- the GPU cone tracer in builds without EGL
 // (PNB_ENABLE_EGL=OFF): every entry point reports Error(backend_unavailable), so callers need no
 // #ifdefs.

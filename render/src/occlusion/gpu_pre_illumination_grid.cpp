@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gpu_pre_illumination_grid.cpp -- the object-space grid the GPU cone tracer
 // fills: the same nodes and the same clamped trilinear sampling as PreIlluminationVolume, so both
 // paths give the same field for the same bounds and resolution. Compiled with and without EGL.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/node_grid.h -- the object-space grid's nodes and sampling, shared by
 // PreIlluminationVolume and the GPU cone tracer's grid so both give the same field
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/occlusion_shading.cpp -- cones towards the eye and towards lights
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/pre_illumination.cpp -- object-space occlusion volume and per-point fields
 #include <chrono>
 #include <cmath>

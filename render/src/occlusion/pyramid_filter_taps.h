@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/pyramid_filter_taps.h -- what the CPU and the GPU pyramid builds must
 // share exactly: the Gaussian taps of a pass and the opacity cap
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/aligned_and_step_test.cpp -- shift-aligned VQ pages (format version 2),
 // reading version-1 files, and one-step decoding (section offsets, sequential predictive steps).
 #include <gtest/gtest.h>

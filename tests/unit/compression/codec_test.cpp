@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/codec_test.cpp -- LBG training and the window codec's round trips.
 #include <gtest/gtest.h>
 

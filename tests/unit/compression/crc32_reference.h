@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/crc32_reference.h -- CRC-32 (IEEE 802.3, bit-reflected 0xEDB88320) one
 // bit at a time: obviously the definition, for checking the library's checksum and for editing
 // files under test (rewriting a field and its checksum).

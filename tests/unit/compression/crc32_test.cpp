@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/crc32_test.cpp -- the page checksum against the bit-by-bit CRC-32, on every
 // length around the carry-less-multiply path's block sizes and from any starting value.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/expect_error.h -- a call must fail with a given Error code and message.
 #pragma once
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/file_format_test.cpp -- field files: round trip, truncation, corruption.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: BSD-3-Clause
 # tests/unit/compression/lane_blocks_isa_check.sh LIBRARY -- the AVX-512 lane-block decoders'
 # TwoShifts instances run on CPUs without AVX-512 VBMI2, yet GCC compiles them with VBMI2 allowed
 # (a template takes the target of its definition; see lane_blocks_decoder.cpp). No VBMI2

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/lane_blocks_test.cpp -- predictive_lanes pages: the bound at every value
 // on hard windows (one or two steps, a partial last block, exceptions, raw lanes), every decode
 // path against the window, the table checks, and the file format's version gate.

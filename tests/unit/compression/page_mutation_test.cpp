@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/page_mutation_test.cpp -- validate_page's contract under random damage:
 // a page it accepts decodes without error and reads only its own arrays. The normal build sees
 // a crash or an exception; the sanitizer build (scripts/sanitize.sh) also sees every read

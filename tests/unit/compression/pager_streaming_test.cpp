@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/pager_streaming_test.cpp -- pager playback and the streaming encoder.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/stream_field.h -- writing a synthetic field to a file the way a solver
 // does: one push per step through the streaming encoder.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/temp_path.h -- unique scratch file paths for the compression tests.
 #pragma once
 #include <gtest/gtest.h>

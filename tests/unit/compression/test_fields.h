@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/test_fields.h -- small synthetic time-varying fields, step-major, and the
 // pages encoded from them.
 #pragma once

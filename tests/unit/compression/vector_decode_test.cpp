@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/compression/vector_decode_test.cpp -- the vector-lane decoders (8 vertices per AVX2
 // lane block) give the same bits as the scalar ones, on every page method with bit blocks and
 // every section kind (plain, patched, raw), for window, step and cursor decodes.

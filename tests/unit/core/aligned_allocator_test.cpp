@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/core/aligned_allocator_test.cpp -- blocks start on the boundary asked for, through
 // growth, copies and element types of other sizes.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/core/thread_pool_test.cpp
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/cinema_database_test.cpp -- data.csv layout, resume, refuse, I/O errors
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/config_test.cpp -- JSON config: documented defaults and every error
 #include <gtest/gtest.h>
 

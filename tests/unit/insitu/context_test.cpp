@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/context_test.cpp -- the per-step pipeline through the C++ Context
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/database_checks.h -- what a Cinema database left by the helper solver
 // (kill_helper.cpp: 32x32 images) must be, whatever stopped it
 #pragma once

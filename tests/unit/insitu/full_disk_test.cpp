@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/full_disk_test.cpp -- a write that fails part way (a full disk) is a clear error
 // through the API, and what was already written stays valid and resumable.
 //

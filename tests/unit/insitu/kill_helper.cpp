@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/kill_helper.cpp -- a "solver" that renders steps until it is killed.
 // Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS [STORE_DIR]
 // With STORE_DIR the run also keeps its compressed history there (windows of 8 steps).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/kill_resume_test.cpp -- a database left by a SIGKILLed solver is valid and resumable
 #include <gtest/gtest.h>
 #include <signal.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/lighting_config_test.cpp -- the "lighting" config object, and lit steps
 #include <gtest/gtest.h>
 

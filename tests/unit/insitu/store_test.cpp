@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/store_test.cpp -- the run's compressed history (config "store") and its
 // read-back for re-rendering
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/test_util.h -- temporary directories and config snippets for insitu tests
 #pragma once
 #include <stdlib.h>

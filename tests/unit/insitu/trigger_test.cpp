@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/trigger_test.cpp -- which steps render
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/crossing_arena_test.cpp -- spans of walk crossings: disjoint, stable, reusable
 #include <gtest/gtest.h>
 

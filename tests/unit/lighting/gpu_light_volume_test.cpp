@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/gpu_light_volume_test.cpp -- the GPU light solve against the CPU solve
 //
 // Runs on Mesa's llvmpipe where no GPU exists (surfaceless EGL). Both solves converge to their

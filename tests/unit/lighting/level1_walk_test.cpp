@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/level1_walk_test.cpp -- the level-1 walk towards the light
 #include <gtest/gtest.h>
 

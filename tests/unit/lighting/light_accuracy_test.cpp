@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/light_accuracy_test.cpp -- the light volume against analytic transmittance
 // and the double-precision reference
 #include <gtest/gtest.h>

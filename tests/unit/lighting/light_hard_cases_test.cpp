@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/light_hard_cases_test.cpp -- stability and robustness cases of the issue
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/light_scattering_test.cpp -- eq. 9 (combining lights) and eq. 12 (diffusion)
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/light_update_test.cpp -- incremental updates (Algorithm 1), budgets, errors
 #include <gtest/gtest.h>
 

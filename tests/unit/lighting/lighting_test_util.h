@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/lighting_test_util.h -- meshes, fields and comparisons for the light-volume tests
 #pragma once
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/lighting/vertex_order_test.cpp -- the level-1 vertex order (groups along the light)
 #include <gtest/gtest.h>
 

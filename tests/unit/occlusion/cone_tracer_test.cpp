@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/cone_tracer_test.cpp -- cone schedule, homogeneous media, domain boundary
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/gap_depth_test.cpp -- exact depth over a shadow cone's gap, and shadows
 // that include it
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/gpu_cone_tracer_test.cpp -- the GPU cone tracer against ConeTracer
 //
 // Runs on Mesa's llvmpipe where no GPU exists (surfaceless EGL, no display needed).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/monte_carlo_test.cpp -- Monte Carlo ground truth and cone tracing against it
 #include <gtest/gtest.h>
 

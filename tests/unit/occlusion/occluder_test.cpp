@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occluder_test.cpp -- opaque occluders against analytic cone fractions
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_lighting_gpu_test.cpp -- the in-situ light field of lighting model
 // "occlusion" (insitu/src/occlusion_lighting.h) with its cones traced on the GPU, against the
 // same object on the CPU: spaces "points" and "volume", occlusion times two coloured lights, two

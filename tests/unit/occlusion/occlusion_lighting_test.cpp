@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_lighting_test.cpp -- the in-situ light field of lighting model
 // "occlusion" (insitu/src/occlusion_lighting.h) on the CPU against the exact shadow
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_test_util.h -- synthetic grids and meshes for the occlusion tests
 #pragma once
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/pyramid_test.cpp -- resampling and the Gaussian extinction pyramid
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "ray_frame.h"
 
 #include <gtest/gtest.h>

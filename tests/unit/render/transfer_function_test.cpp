@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "penumbra/render/transfer_function.h"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Which EGL device the GPU backend picks: pure logic over device descriptions.
 #include <gtest/gtest.h>
 

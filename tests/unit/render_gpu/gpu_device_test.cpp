@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Opening the headless context, and the clear error when EGL is missing.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The buffers the shader reads: mesh layout, boundary BVH, transfer-function pieces, series.
 #include <gtest/gtest.h>
 

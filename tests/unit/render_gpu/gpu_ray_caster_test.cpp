@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The GPU ray caster's memory accounting, incremental field upload, argument checks and sharing.
 #include <gtest/gtest.h>
 

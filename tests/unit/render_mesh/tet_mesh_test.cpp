@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/render_mesh/tet_mesh_test.cpp -- splitting, orientation, welding, adjacency
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/vtk/replay_test.cpp -- penumbra-replay end to end: files -> C API -> Cinema database
 #include <gtest/gtest.h>
 #include <vtkDoubleArray.h>

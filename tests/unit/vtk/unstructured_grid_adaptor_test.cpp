@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/vtk/unstructured_grid_adaptor_test.cpp -- zero-copy views and the copy paths
 #include <gtest/gtest.h>
 #include <vtkCellArray.h>

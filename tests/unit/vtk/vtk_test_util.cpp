@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/vtk/vtk_test_util.cpp
 #include "vtk_test_util.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/vtk/vtk_test_util.h -- small VTK grids and temp directories for the adaptor tests
 #pragma once
 #include <vtkSmartPointer.h>
@@ -26,7 +27,7 @@ private:
   std::filesystem::path m_path;
 };
 
-/// The shared real-data directory.
-inline std::filesystem::path data_dir() { return PNB_SHARED_DATA_DIR; }
+/// The real meshes bundled with the tests (tests/data/README.md).
+inline std::filesystem::path data_dir() { return PNB_TEST_DATA_DIR; }
 
 }  // namespace penumbra::test

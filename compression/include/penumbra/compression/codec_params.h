@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/codec_params.h
 #pragma once
 #include <cstdint>

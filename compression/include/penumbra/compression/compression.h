@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/compression.h -- everything a consumer needs:
 //   StreamingEncoder   in situ: push(time, values) each step, finish() at the end
 //   CompressedField    open a field file, random access to any step (read_step)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/encoded_page.h
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/field_file.h
 #pragma once
 #include <cstdint>

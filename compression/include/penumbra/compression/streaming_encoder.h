@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/streaming_encoder.h
 #pragma once
 #include <condition_variable>

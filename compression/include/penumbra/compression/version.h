@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/version.h
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compression/include/penumbra/compression/window_codec.h
 #pragma once
 #include <cstdint>

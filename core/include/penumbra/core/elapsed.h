@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/elapsed.h -- wall time since a point, in milliseconds
 #pragma once
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/error.h
 #pragma once
 #include <stdexcept>

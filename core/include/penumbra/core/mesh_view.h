@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/mesh_view.h
 #pragma once
 #include <cstddef>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/morton.h -- Morton (Z-order) codes, for cache-friendly orders
 #pragma once
 #include <cstdint>

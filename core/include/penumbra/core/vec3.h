@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/vec3.h
 #pragma once
 #include <cmath>

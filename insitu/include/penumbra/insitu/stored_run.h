@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // insitu/include/penumbra/insitu/stored_run.h -- reading back the compressed history a run kept
 // (config "store"), to render it again after the run with another config
 #pragma once

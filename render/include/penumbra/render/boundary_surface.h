@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/boundary_surface.h
 #pragma once
 #include <array>

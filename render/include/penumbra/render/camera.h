@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/camera.h
 #pragma once
 #include "penumbra/core/vec3.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/cpu_ray_caster.h
 #pragma once
 #include <memory>

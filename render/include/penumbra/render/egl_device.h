@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/egl_device.h -- headless EGL devices and which one to use
 #pragma once
 #include <functional>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/gpu_occlusion.h -- Gaussian cone tracing on a GPU (OpenGL 4.5
 // compute shaders), for many query points per dispatch
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/gpu_ray_caster.h -- the ray caster on a GPU through headless EGL
 #pragma once
 #include <cstddef>

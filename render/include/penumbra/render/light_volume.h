@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/light_volume.h
 //
 // Global lighting for tet meshes: the two-level light volume of Shih, Zhang & Ma ("Advanced

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/occlusion.h
 //
 // Directional ambient occlusion and shadows by Gaussian cone tracing (Campagnolo, ch. 3; on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/shading.h -- how samples are lit: emission only, gradient
 // Phong, or Phong times a light volume L(x) (Shih, Zhang & Ma, eq. 3)
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/include/penumbra/render/tet_mesh.h
 #pragma once
 #include <array>

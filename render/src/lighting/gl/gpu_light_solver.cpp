@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/gl/gpu_light_solver.cpp -- buffers and dispatches of the light-volume kernels
 #include "../gpu_light_solver.h"
 

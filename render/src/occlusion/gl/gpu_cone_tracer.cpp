@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gl/gpu_cone_tracer.cpp -- buffers, uniforms and dispatches of the
 // cone-tracing shader (render/shaders/cone_trace.comp)
 //

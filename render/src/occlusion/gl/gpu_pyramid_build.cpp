@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gl/gpu_pyramid_build.cpp -- the extinction pyramid filtered on the device
 // (render/shaders/pyramid_filter.comp), level by level as ExtinctionPyramid's constructor does:
 // the same lattices (margin of ceil(3 sigma0 / spacing) nodes, every second node per level), the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // render/src/occlusion/gl/occlusion_gl_util.h -- what the GPU cone tracer and the GPU pyramid
 // build share: storage buffers that grow on demand, chunked dispatch (programs: gpu/gl_program.h)
 #pragma once

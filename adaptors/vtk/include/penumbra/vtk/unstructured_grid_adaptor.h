@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // adaptors/vtk/include/penumbra/vtk/unstructured_grid_adaptor.h
 #pragma once
 #include <cstddef>
