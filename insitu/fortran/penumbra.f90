@@ -47,7 +47,7 @@ module penumbra
     integer(c_int) :: light_converged = 0
   end type
 
-  public :: pnb_create, pnb_publish_mesh, pnb_publish_field, pnb_execute, pnb_finalize, pnb_destroy
+  public :: pnb_create, pnb_check_config, pnb_publish_mesh, pnb_publish_field, pnb_execute, pnb_finalize, pnb_destroy
   public :: pnb_last_step
   public :: pnb_last_error_message
 
@@ -56,6 +56,10 @@ module penumbra
       import :: c_int, c_char, c_ptr
       character(kind=c_char), dimension(*), intent(in) :: config
       type(c_ptr), intent(out) :: ctx
+    end function
+    integer(c_int) function pnb_check_config(config) bind(C, name="pnb_check_config")
+      import :: c_int, c_char
+      character(kind=c_char), dimension(*), intent(in) :: config
     end function
     integer(c_int) function pnb_publish_mesh(ctx, mesh, own) bind(C, name="pnb_publish_mesh")
       import :: c_int, c_ptr, pnb_mesh_desc

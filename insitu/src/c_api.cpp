@@ -146,6 +146,13 @@ pnb_status pnb_create(const char* config, pnb_context* out) {
   });
 }
 
+pnb_status pnb_check_config(const char* config) {
+  return guarded(nullptr, [&] {
+    penumbra::require(config != nullptr, "pnb_check_config: config is NULL (expected a file path or JSON text)");
+    penumbra::insitu::check_config_rules(penumbra::insitu::parse_config(config));
+  });
+}
+
 pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own) {
   if (!ctx) return null_context("pnb_publish_mesh");
   return guarded(ctx, [&] {

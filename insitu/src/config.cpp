@@ -52,6 +52,10 @@ double number(const json& j, const std::string& path) {
 
 std::int64_t integer(const json& j, const std::string& path, std::int64_t lo, std::int64_t hi) {
   if (!j.is_number_integer()) fail(path, "must be an integer");
+  // Above the largest int64 (JSON integers up to 2^64 - 1 parse as unsigned): not cast to a negative.
+  if (j.is_number_unsigned() && j.get<std::uint64_t>() > std::uint64_t(hi))
+    fail(path, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                   std::to_string(j.get<std::uint64_t>()));
   const std::int64_t v = j.get<std::int64_t>();
   if (v < lo || v > hi) fail(path, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
   return v;
@@ -451,6 +455,14 @@ bool Config::uses_field(const std::string& name) const {
   return false;
 }
 
+void check_config_rules(const Config& c) {
+  if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
+      c.backend == Backend::gpu)
+    throw Error(ErrorCode::backend_unavailable,
+                "config: lighting.occlusion.space \"image\" is evaluated by the CPU backend only; use backend "
+                "\"cpu\" or \"auto\", or space \"points\" or \"volume\"");
+}
+
 Config parse_config(const std::string& text_or_path) {
   std::size_t first = 0;
   while (first < text_or_path.size() && std::isspace(static_cast<unsigned char>(text_or_path[first]))) ++first;
@@ -468,7 +480,7 @@ Config parse_config(const std::string& text_or_path) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, or out_of_range for a number too large for a double
     throw Error(ErrorCode::invalid_argument, "config: " + source + " is not valid JSON: " + e.what());
   }
   return parse_document(j);

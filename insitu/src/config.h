@@ -131,4 +131,9 @@ struct Config {
 /// for unknown keys, wrong types or values, and Error(io_error) when the file cannot be read.
 Config parse_config(const std::string& text_or_path);
 
+/// The rules that join several keys, checked by a Context before it opens anything (and by
+/// pnb_check_config): lighting.occlusion.space "image" is evaluated by the CPU ray caster only,
+/// so it throws Error(backend_unavailable) with backend "gpu".
+void check_config_rules(const Config& config);
+
 }  // namespace penumbra::insitu

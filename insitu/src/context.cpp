@@ -200,15 +200,11 @@ Context::Context(Config config)
     : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   m_cpu_fallback = m_config.backend == Backend::automatic;
+  check_config_rules(m_config);
+  // Image-space occlusion is evaluated along every ray, by the CPU ray caster.
   if (m_config.lighting && m_config.lighting->occlusion_model &&
-      m_config.lighting->occlusion.space == OcclusionSpace::image) {
-    // Image-space occlusion is evaluated along every ray, by the CPU ray caster.
-    if (m_config.backend == Backend::gpu)
-      throw Error(ErrorCode::backend_unavailable,
-                  "config: lighting.occlusion.space \"image\" is evaluated by the CPU backend only; use backend "
-                  "\"cpu\" or \"auto\", or space \"points\" or \"volume\"");
+      m_config.lighting->occlusion.space == OcclusionSpace::image)
     m_config.backend = Backend::cpu;
-  }
   m_config.backend = resolve_backend(m_config.backend);
   m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
                                                 m_config.if_exists);

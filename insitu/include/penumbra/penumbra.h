@@ -80,6 +80,15 @@ typedef struct {
  * when the directory cannot be created or written, PNB_BACKEND_UNAVAILABLE for a backend this
  * build lacks. On failure *out is NULL and pnb_last_error(NULL) tells why. */
 pnb_status pnb_create(const char* config, pnb_context* out);
+/* Checks a config as pnb_create does (a file path, or JSON text starting with '{'), without
+ * creating anything: no context, database, store or directory, no GPU opened, nothing written.
+ * Returns PNB_OK or the status pnb_create gives for the same config: PNB_INVALID_ARGUMENT for a
+ * bad config (the message names the key path), PNB_IO_ERROR for a config file that cannot be
+ * read, PNB_BACKEND_UNAVAILABLE for keys that no backend of the config can run together; on
+ * failure pnb_last_error(NULL) tells why. What depends on the machine is left to pnb_create:
+ * the output and store directories (non-empty without "resume", not writable, a resumed
+ * data.csv's header) and whether a GPU can be opened. */
+pnb_status pnb_check_config(const char* config);
 /* Publishes (or republishes) the mesh: validates it (errors name the offending cell or point)
  * and prepares it for rendering. Penumbra copies what it keeps, so the arrays may be freed after
  * the call whatever `own` says. Republishing the same topology_version returns at once. */
