@@ -16,14 +16,17 @@ namespace {
 
 class HeaderReader {
 public:
-  HeaderReader(std::ifstream& in, bool offsets64) : m_in(in), m_offsets64(offsets64) {}
+  HeaderReader(std::istream& in, bool offsets64) : m_in(in), m_offsets64(offsets64) {}
   bool ok() const { return static_cast<bool>(m_in); }
   std::uint64_t u32() {
     unsigned char b[4] = {};
     m_in.read(reinterpret_cast<char*>(b), 4);
     return (std::uint64_t{b[0]} << 24) | (std::uint64_t{b[1]} << 16) | (std::uint64_t{b[2]} << 8) | b[3];
   }
-  std::uint64_t offset() { return m_offsets64 ? (u32() << 32) | u32() : u32(); }
+  std::uint64_t offset() {
+    const std::uint64_t first = u32();  // the high word of a 64-bit offset: read before the low one
+    return m_offsets64 ? (first << 32) | u32() : first;
+  }
   void skip(std::uint64_t bytes) { m_in.seekg(static_cast<std::streamoff>((bytes + 3) / 4 * 4), std::ios::cur); }
   void skip_name() { skip(u32()); }
   void skip_attributes() {
@@ -46,7 +49,7 @@ public:
   }
 
 private:
-  std::ifstream& m_in;
+  std::istream& m_in;
   bool m_offsets64;
 };
 
@@ -54,6 +57,10 @@ private:
 
 std::optional<std::uint64_t> netcdf_classic_min_size(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
+  return netcdf_classic_min_size(in);
+}
+
+std::optional<std::uint64_t> netcdf_classic_min_size(std::istream& in) {
   char magic[4] = {};
   in.read(magic, 4);
   if (!in || magic[0] != 'C' || magic[1] != 'D' || magic[2] != 'F' || (magic[3] != 1 && magic[3] != 2))
@@ -82,7 +89,7 @@ std::optional<std::uint64_t> netcdf_classic_min_size(const std::string& path) {
       h.skip_name();
       const std::uint64_t ndims = h.u32();
       bool record = false;
-      for (std::uint64_t d = 0; d < ndims; ++d) {
+      for (std::uint64_t d = 0; d < ndims && h.ok(); ++d) {  // ndims is the file's word: up to 2^32 - 1
         const std::uint64_t id = h.u32();
         if (d == 0 && id < dim_lengths.size() && dim_lengths[id] == 0) record = true;
       }

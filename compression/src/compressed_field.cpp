@@ -148,7 +148,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
 
   // No valid index: walk the pages to say where the file ends or breaks, and (if asked)
   // keep the complete, intact pages before that point.
-  std::uint64_t pos = header_bytes;
+  std::uint64_t pos = header_bytes, next_step = 0;
   std::string problem;
   for (std::size_t i = 0;; ++i) {
     if (pos == size) {
@@ -175,12 +175,14 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       problem = "header of " + page_name(i) + " is corrupt (at byte " + std::to_string(pos) + ")";
       break;
     }
-    if (h.page_index != i || h.payload_bytes > size - pos - detail::PageHeader::kBytes) {
+    if (h.page_index != i || h.first_step != next_step || h.payload_bytes > size - pos - detail::PageHeader::kBytes) {
       problem = h.page_index != i ? "header of " + page_name(i) + " is corrupt (wrong page number)"
-                                  : "truncated inside " + page_name(i) + ": it needs " +
-                                        std::to_string(detail::PageHeader::kBytes + h.payload_bytes) +
-                                        " bytes from byte " + std::to_string(pos) + ", the file has " +
-                                        std::to_string(size - pos);
+                : h.first_step != next_step
+                    ? "header of " + page_name(i) + " is corrupt (it starts at step " + std::to_string(h.first_step) +
+                          ", not at step " + std::to_string(next_step) + ")"
+                    : "truncated inside " + page_name(i) + ": it needs " +
+                          std::to_string(detail::PageHeader::kBytes + h.payload_bytes) + " bytes from byte " +
+                          std::to_string(pos) + ", the file has " + std::to_string(size - pos);
       break;
     }
     PageEntry e{pos, detail::PageHeader::kBytes + h.payload_bytes, h.first_step, h.step_count,
@@ -205,6 +207,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       }
     }
     pos += e.bytes;
+    next_step += h.step_count;
   }
   if (!options.recover_incomplete) fail(path, problem);
   if (f->m_pages.empty()) fail(path, "no complete page to recover: " + problem);

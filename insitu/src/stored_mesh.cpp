@@ -96,24 +96,28 @@ StoredMesh read_stored_mesh(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) bad(path, "cannot be opened");
   const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() < 8 + 24 + 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+  return parse_stored_mesh(bytes.data(), bytes.size(), path);
+}
+
+StoredMesh parse_stored_mesh(const unsigned char* bytes, std::size_t size, const std::string& path) {
+  if (size < 8 + 24 + 8 || std::memcmp(bytes, kMagic, 8) != 0)
     bad(path, "is not a Penumbra mesh file (or is truncated before its header ends)");
   std::uint64_t counts[3];
-  std::memcpy(counts, bytes.data() + 8, sizeof counts);
+  std::memcpy(counts, bytes + 8, sizeof counts);
   const std::uint64_t np = counts[0], nc = counts[1], nconn = counts[2];
   // Counts bounded by the file size before any multiplication can overflow.
-  if (np > bytes.size() || nc > bytes.size() || nconn > bytes.size()) bad(path, "has impossible counts");
+  if (np > size || nc > size || nconn > size) bad(path, "has impossible counts");
   const std::uint64_t need = 8 + 24 + np * 24 + (nc + 1) * 8 + nconn * 8 + nc + 8;
-  if (bytes.size() != need)
-    bad(path, "has " + std::to_string(bytes.size()) + " bytes, expected " + std::to_string(need) + " (truncated?)");
+  if (size != need)
+    bad(path, "has " + std::to_string(size) + " bytes, expected " + std::to_string(need) + " (truncated?)");
   std::uint64_t sum = 0;
-  std::memcpy(&sum, bytes.data() + need - 8, 8);
-  if (sum != fnv1a(bytes.data(), need - 8)) bad(path, "checksum mismatch (corrupt file)");
+  std::memcpy(&sum, bytes + need - 8, 8);
+  if (sum != fnv1a(bytes, need - 8)) bad(path, "checksum mismatch (corrupt file)");
   StoredMesh m;
-  const unsigned char* p = bytes.data() + 32;
+  const unsigned char* p = bytes + 32;
   auto take = [&p](auto& vec, std::size_t n) {
     vec.resize(n);
-    std::memcpy(vec.data(), p, n * sizeof(vec[0]));
+    if (n > 0) std::memcpy(vec.data(), p, n * sizeof(vec[0]));  // an empty vector's data() may be null
     p += n * sizeof(vec[0]);
   };
   take(m.xyz, 3 * np);

@@ -28,4 +28,7 @@ void write_stored_mesh(const std::string& path, const StoredMesh& mesh);
 /// wrong (missing, not a mesh file, truncated, checksum mismatch, inconsistent counts).
 StoredMesh read_stored_mesh(const std::string& path);
 
+/// Parses the `size` bytes of such a file at `bytes`; errors as above, naming `path`.
+StoredMesh parse_stored_mesh(const unsigned char* bytes, std::size_t size, const std::string& path);
+
 }  // namespace penumbra::insitu

@@ -12,6 +12,7 @@
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/pager.h"
 #include "penumbra/core/error.h"
+#include "steps_csv.h"
 #include "stored_mesh.h"
 
 namespace penumbra::insitu {
@@ -28,6 +29,22 @@ struct StoredRun::Impl {
   std::vector<std::pair<std::int64_t, double>> steps;
 };
 
+std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, const std::string& source) {
+  std::vector<std::pair<std::int64_t, double>> steps;
+  std::string line;
+  std::getline(in, line);
+  for (int row = 2; std::getline(in, line); ++row) {
+    long long cycle = 0;
+    double time = 0;
+    char comma = 0;
+    std::istringstream ls(line);
+    if (!(ls >> cycle >> comma >> time) || comma != ',' || !std::isfinite(time))
+      throw Error(ErrorCode::io_error, source + " line " + std::to_string(row) + " is not 'cycle,time'");
+    steps.emplace_back(cycle, time);
+  }
+  return steps;
+}
+
 StoredRun::StoredRun() : m_impl(std::make_unique<Impl>()) {}
 StoredRun::~StoredRun() = default;
 
@@ -41,18 +58,7 @@ std::unique_ptr<StoredRun> StoredRun::open(const std::string& dir) {
   {
     std::ifstream in(dir + "/steps.csv");
     if (!in) throw Error(ErrorCode::io_error, "stored run '" + dir + "': steps.csv is missing");
-    std::string line;
-    std::getline(in, line);
-    for (int row = 2; std::getline(in, line); ++row) {
-      long long cycle = 0;
-      double time = 0;
-      char comma = 0;
-      std::istringstream ls(line);
-      if (!(ls >> cycle >> comma >> time) || comma != ',' || !std::isfinite(time))
-        throw Error(ErrorCode::io_error, "stored run '" + dir + "': steps.csv line " + std::to_string(row) +
-                                             " is not 'cycle,time'");
-      im.steps.emplace_back(cycle, time);
-    }
+    im.steps = parse_steps_csv(in, "stored run '" + dir + "': steps.csv");
   }
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();

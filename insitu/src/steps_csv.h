@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// insitu/src/steps_csv.h -- the store's step list, steps.csv, read back
+#pragma once
+#include <cstdint>
+#include <istream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra::insitu {
+
+/// Reads a store segment's `steps.csv` (FieldStore writes it: a header line, then one
+/// `cycle,time` line per recorded step) from `in`: (cycle, time) per line after the header.
+/// Throws Error(io_error) naming `source` and the line that is not `cycle,time` with an integer
+/// cycle and a finite time.
+std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, const std::string& source);
+
+}  // namespace penumbra::insitu
