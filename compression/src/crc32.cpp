@@ -2,10 +2,13 @@
 // compression/src/crc32.cpp
 #include "crc32.h"
 
-#include <immintrin.h>
-
 #include <array>
 #include <cstring>
+
+#include "cpu_features.h"
+#if PNB_X86_KERNELS
+#include <immintrin.h>
+#endif
 
 namespace penumbra::compression::detail {
 
@@ -30,6 +33,7 @@ const Tables& tables() {
   return t;
 }
 
+#if PNB_X86_KERNELS
 #define PNB_CLMUL __attribute__((target("pclmul,sse4.1"), always_inline)) inline
 
 PNB_CLMUL __m128i load(const std::uint8_t* at) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(at)); }
@@ -74,6 +78,7 @@ __attribute__((target("pclmul,sse4.1"))) std::uint32_t fold_pclmul(const std::ui
   t = _mm_clmulepi64_si128(_mm_and_si128(t, mask32), poly, 0x00);
   return static_cast<std::uint32_t>(_mm_extract_epi32(_mm_xor_si128(x1, t), 1));
 }
+#endif  // PNB_X86_KERNELS
 
 }  // namespace
 
@@ -81,13 +86,15 @@ std::uint32_t crc32(const void* data, std::size_t size, std::uint32_t crc) {
   const Tables& t = tables();
   const auto* p = static_cast<const std::uint8_t*>(data);
   crc = ~crc;
-  static const bool has_pclmul = __builtin_cpu_supports("pclmul") && __builtin_cpu_supports("sse4.1");
+#if PNB_X86_KERNELS
+  static const bool has_pclmul = cpu_features().pclmul && cpu_features().sse41;
   if (has_pclmul && size >= 64) {
     const std::size_t blocks = size / 16 * 16;
     crc = fold_pclmul(p, blocks, crc);
     p += blocks;
     size -= blocks;
   }
+#endif
   while (size >= 8) {
     std::uint32_t lo, hi;
     std::memcpy(&lo, p, 4);

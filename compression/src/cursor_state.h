@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bit_io.h"
+#include "cpu_features.h"
 #include "lane_blocks.h"
 #include "penumbra/compression/encoded_page.h"
 #include "value_layout.h"
@@ -42,11 +43,13 @@ inline std::uint32_t value_count(const EncodedPage& p) {
 /// the first exception at or after i.
 void seek(const EncodedPage& p, std::uint32_t i, CursorState& s);
 
+#if PNB_X86_KERNELS
 /// seek(p, 0, s) for the lane blocks of [b, e) (whole blocks, section_lanes.cpp): the sections
 /// parsed side by side. Blocks with a raw lane are left out: their first vertices are written to
 /// `left_out` (room for (e - b) / 8 entries) and their count is returned, for the scalar seek.
 std::uint64_t seek_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, std::uint64_t* left_out,
                          CursorState& s);
+#endif
 
 /// Vertex v's exception at value index s.next[v], moving its next exception on. Inline: the
 /// lanes call it for every exception they meet.
@@ -72,8 +75,10 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
 /// on residual pages. Raw vertices are left to the caller.
 void cursor_step_vertex(const EncodedPage& p, std::uint32_t t, std::uint64_t v, float* out, CursorState& s);
 
+#if PNB_X86_KERNELS
 /// The same for the lane blocks of [b, e) (section_lanes.cpp).
 void cursor_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
                        CursorState& s);
+#endif
 
 }  // namespace penumbra::compression::detail

@@ -31,6 +31,7 @@
 #include <string>
 
 #include "bit_io.h"
+#include "cpu_features.h"
 #include "penumbra/compression/encoded_page.h"
 
 namespace penumbra::compression::detail {
@@ -162,14 +163,17 @@ inline std::uint32_t next_exception_step(const std::uint16_t* steps, std::uint64
 inline void prefetch_row_ahead(const float* stored) { __builtin_prefetch(stored + 2 * kLaneBlock, 0, 3); }
 
 /// The vector decoders lane blocks use: the widest the CPU has, unless set_vector_decode turned
-/// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way).
+/// the lanes off (scalar) or cap_lane_isa capped them (tests run each one this way). Always
+/// scalar in a build without x86 kernels (cpu_features.h).
 enum class LaneIsa { scalar = 0, avx2 = 1, avx512 = 2, avx512_vbmi2 = 3 };
 LaneIsa lane_isa();
 void cap_lane_isa(LaneIsa widest);
 
+#if PNB_X86_KERNELS
 /// The AVX2 window and cursor decoders (lane_blocks_avx2.cpp); raw lanes are left to the caller.
 void lane_blocks_window_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window);
 void lane_blocks_next_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out);
+#endif
 
 /// Points `s` at step 0 of block b.
 void lane_block_begin(const EncodedPage& p, std::uint64_t b, LaneBlockState& s);

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_avx2.cpp -- the AVX2 decoders of predictive_lanes pages, for CPUs
 // without AVX-512: each block of 16 lanes as two vectors of 8, bit-identical to lane_block_step.
+// Empty in a build without x86 kernels (cpu_features.h).
+#include "cpu_features.h"
+
+#if PNB_X86_KERNELS
 #include <immintrin.h>
 
 #include <algorithm>
@@ -203,3 +207,5 @@ void lane_blocks_next_avx2(const EncodedPage& p, std::uint64_t b, std::uint64_t 
 }
 
 }  // namespace penumbra::compression::detail
+
+#endif  // PNB_X86_KERNELS

@@ -1,17 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_blocks_decoder.cpp -- decoders of predictive_lanes pages: a scalar one
 // that every path can use, and AVX-512 window and cursor decoders that are bit-identical to it
-// (the AVX2 ones are in lane_blocks_avx2.cpp).
-#include <immintrin.h>
-
+// (the AVX2 ones are in lane_blocks_avx2.cpp). The vector decoders exist only where
+// PNB_X86_KERNELS is 1 (cpu_features.h); elsewhere every decode takes the scalar one.
 #include <algorithm>
 #include <atomic>
 #include <bit>
 #include <type_traits>
 
+#include "cpu_features.h"
 #include "lane_blocks.h"
 #include "section_lanes.h"
 #include "target_region.h"
+#if PNB_X86_KERNELS
+#include <immintrin.h>
+#endif
 
 namespace penumbra::compression::detail {
 
@@ -69,6 +72,7 @@ void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockStat
 
 namespace {
 
+#if PNB_X86_KERNELS
 // The raw lanes of blocks [b, e), every step (after the vector decoder wrote their slots' zeros).
 void write_raw_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;
@@ -82,6 +86,7 @@ void write_raw_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, flo
     }
   }
 }
+#endif  // PNB_X86_KERNELS
 
 void scalar_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const std::uint64_t N = p.vertex_count;
@@ -97,6 +102,7 @@ void scalar_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
 
 std::atomic<int> g_lane_isa_cap{int(LaneIsa::avx512_vbmi2)};
 
+#if PNB_X86_KERNELS
 // GCC 12 warns that the AVX-512 intrinsics' own undefined-vector placeholders may be used
 // uninitialised (a false positive inside immintrin.h).
 #pragma GCC diagnostic push
@@ -371,14 +377,15 @@ void avx512_blocks(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float
 }
 PNB_TARGET_REGION_END
 #pragma GCC diagnostic pop
+#endif  // PNB_X86_KERNELS
 
 }  // namespace
 
 LaneIsa lane_isa() {
   static const LaneIsa cpu = [] {
-    if (__builtin_cpu_supports("avx512f"))
-      return __builtin_cpu_supports("avx512vbmi2") ? LaneIsa::avx512_vbmi2 : LaneIsa::avx512;
-    return __builtin_cpu_supports("avx2") ? LaneIsa::avx2 : LaneIsa::scalar;
+    const CpuFeatures& f = cpu_features();
+    if (f.avx512f) return f.avx512vbmi2 ? LaneIsa::avx512_vbmi2 : LaneIsa::avx512;
+    return f.avx2 ? LaneIsa::avx2 : LaneIsa::scalar;
   }();
   if (!lanes_active()) return LaneIsa::scalar;
   return LaneIsa(std::min(int(cpu), g_lane_isa_cap.load(std::memory_order_relaxed)));
@@ -388,6 +395,7 @@ void cap_lane_isa(LaneIsa widest) { g_lane_isa_cap.store(int(widest), std::memor
 
 void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   if (b >= e) return;
+#if PNB_X86_KERNELS
   switch (lane_isa()) {
     case LaneIsa::avx512_vbmi2: avx512_blocks<FunnelShift>(p, b, e, window); break;
     case LaneIsa::avx512: avx512_blocks<TwoShifts>(p, b, e, window); break;
@@ -395,6 +403,9 @@ void lane_blocks_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, 
     case LaneIsa::scalar: scalar_window(p, b, e, window); return;  // raw lanes included
   }
   write_raw_lanes(p, b, e, window);
+#else
+  scalar_window(p, b, e, window);  // raw lanes included
+#endif
 }
 
 void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
@@ -406,6 +417,7 @@ void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, La
     }
     return;
   }
+#if PNB_X86_KERNELS
   if (isa == LaneIsa::avx512_vbmi2)
     avx512_next<FunnelShift>(p, b, e, states, out);
   else if (isa == LaneIsa::avx512)
@@ -414,6 +426,7 @@ void lane_blocks_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, La
     lane_blocks_next_avx2(p, b, e, states, out);
   for (std::uint64_t k = b; k < e; ++k)
     if (p.lanes.raw[k]) write_raw_step(p, k, states[k].t - 1, out + k * kLaneBlock);
+#endif
 }
 
 void lane_blocks_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,

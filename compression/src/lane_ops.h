@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // compression/src/lane_ops.h -- the AVX2 building blocks the lane decoders share (private):
 // 8 lanes loaded, widened or stored. Functions carry the AVX2 target themselves, so callers
-// compile without -mavx2 and choose them at run time (section_lanes.h: lanes_active).
+// compile without -mavx2 and choose them at run time (section_lanes.h: lanes_active). x86 only
+// (cpu_features.h): empty where PNB_X86_KERNELS is 0.
 #pragma once
+#include "cpu_features.h"
+
+#if PNB_X86_KERNELS
 #include <immintrin.h>
 
 #include <cstdint>
@@ -39,3 +43,5 @@ PNB_LANES __m256 add_scaled(__m256 base, __m256i q, __m256 step) {
 }
 
 }  // namespace penumbra::compression::detail
+
+#endif  // PNB_X86_KERNELS

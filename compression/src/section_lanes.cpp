@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "bit_io.h"
+#include "cpu_features.h"
 #include "cursor_state.h"
 #include "lane_ops.h"
 #include "penumbra/compression/window_codec.h"
@@ -25,9 +26,13 @@ bool vector_decode_active() { return detail::lanes_active(); }
 namespace detail {
 
 bool lanes_active() {
-  static const bool cpu_has_avx2 = __builtin_cpu_supports("avx2");
+  static const bool cpu_has_avx2 = cpu_features().avx2;
   return cpu_has_avx2 && g_vector_decode.load(std::memory_order_relaxed);
 }
+
+// The lane kernels below are AVX2 code: a build without x86 kernels has only the scalar decoders
+// (lanes_active() is false there, and the callers' lane branches are compiled out).
+#if PNB_X86_KERNELS
 
 namespace {
 
@@ -546,6 +551,8 @@ __attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, s
   }
   return scalar;
 }
+
+#endif  // PNB_X86_KERNELS
 
 }  // namespace detail
 }  // namespace penumbra::compression

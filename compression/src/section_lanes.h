@@ -17,15 +17,18 @@
 #include <cstdint>
 #include <vector>
 
+#include "cpu_features.h"
 #include "penumbra/compression/encoded_page.h"
 
 namespace penumbra::compression::detail {
 
 constexpr std::uint64_t kLanes = 8;
 
-/// True when the CPU has AVX2 and set_vector_decode has not turned the lanes off.
+/// True when the CPU has AVX2 and set_vector_decode has not turned the lanes off (never in a build
+/// without x86 kernels).
 bool lanes_active();
 
+#if PNB_X86_KERNELS
 /// decode_step of a vq_residual / vq_aligned_residual page: adds step t's residual to out[v]
 /// (which holds the VQ value) for v in [b, e).
 void residual_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out,
@@ -35,6 +38,7 @@ void residual_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
 /// window[t * vertex_count + v], which holds the VQ values.
 void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window,
                            std::vector<std::uint64_t>& special);
+#endif  // PNB_X86_KERNELS
 
 /// Vertices a chunk of unpack_residual_lanes holds, and the distance between its step rows of
 /// unpacked values. Plain-VQ pages write each chunk's VQ values with the residual added
@@ -57,6 +61,7 @@ struct ResidualLanes {
   float step;                ///< value of one quantisation step
 };
 
+#if PNB_X86_KERNELS
 /// Unpacks the residual of vertices [v0, v0 + lanes) (lanes a multiple of 8, at most
 /// kResidualChunk) of a vq_residual / vq_aligned_residual page of at most kResidualChunkSteps
 /// steps; raw vertices are appended to `special`, for the caller's scalar path.
@@ -66,5 +71,6 @@ ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0, std:
 /// decode_window of a predictive page for vertices [b, e) into window[t * vertex_count + v].
 void predictive_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window,
                              std::vector<std::uint64_t>& special);
+#endif  // PNB_X86_KERNELS
 
 }  // namespace penumbra::compression::detail

@@ -2,6 +2,7 @@
 // compression/src/step_cursor.cpp -- StepCursor: O(1) sequential steps of pages with bit blocks.
 #include <string>
 
+#include "cpu_features.h"
 #include "cursor_state.h"
 #include "page_methods.h"
 #include "predictive_layout.h"
@@ -66,6 +67,7 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
   // a later value index scans each vertex's exceptions, one vertex at a time.
   parallel_for(N, 1 << 14, [&](std::size_t b, std::size_t e) {
     std::uint64_t v = b;
+#if PNB_X86_KERNELS
     if (i == 0 && lanes_active()) {
       v = b + (e - b) / kLanes * kLanes;
       // Lane blocks holding a raw section are left to the scalar seek.
@@ -74,6 +76,7 @@ void seek(const EncodedPage& p, std::uint32_t i, CursorState& s) {
       for (std::uint64_t k = 0; k < raw_block_count; ++k)
         for (std::uint64_t l = 0; l < kLanes; ++l) seek_vertex(raw_blocks[k] + l);
     }
+#endif
     for (; v < e; ++v) seek_vertex(v);
   });
   s.raw.clear();
@@ -169,10 +172,12 @@ void StepCursor::decode(const std::shared_ptr<const EncodedPage>& page, std::uin
   parallel_for(N, kChunk, [&](std::size_t b, std::size_t e) {
     if (!predictive) detail::vq_base_step(p, t, b, e, out);
     std::uint64_t v = b;
+#if PNB_X86_KERNELS
     if (detail::lanes_active()) {
       v = b + (e - b) / detail::kLanes * detail::kLanes;
       detail::cursor_step_lanes(p, t, b, v, out, s);
     }
+#endif
     for (; v < e; ++v) detail::cursor_step_vertex(p, t, v, out, s);
   });
   const std::uint8_t* data = p.blocks.payload.data();

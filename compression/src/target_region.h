@@ -9,8 +9,9 @@
 // A region rather than a target attribute on each function, so that the lambdas inside are
 // compiled for it too. GCC's target pragma does that; clang ignores it and has an attribute pragma
 // of its own, which reaches lambdas' call operators as well. Callers choose the region's code at
-// run time (__builtin_cpu_supports). And single functions cloned for AVX2 (PNB_AVX2_CLONES, below).
+// run time (cpu_features.h). And single functions cloned for AVX2 (PNB_AVX2_CLONES, below).
 #pragma once
+#include "cpu_features.h"
 
 #define PNB_PRAGMA(text) _Pragma(#text)
 #if defined(__clang__)
@@ -24,8 +25,10 @@
 // A function compiled for AVX2 and the baseline, the loader choosing one (an ifunc). Not under
 // ThreadSanitizer: the loader runs an ifunc's resolver while it relocates the library, before the
 // sanitizer's runtime has started, and the instrumented resolver crashes the process there. That
-// build runs the baseline version.
-#if defined(__SANITIZE_THREAD__)
+// build runs the baseline version, as every build without x86 kernels does (no AVX2 to clone for).
+#if !PNB_X86_KERNELS
+#define PNB_AVX2_CLONES
+#elif defined(__SANITIZE_THREAD__)
 #define PNB_AVX2_CLONES
 #elif defined(__has_feature)
 #if __has_feature(thread_sanitizer)

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "cpu_features.h"
 #include "lane_blocks.h"
 #include "lane_ops.h"
 #include "section_lanes.h"
@@ -14,6 +15,11 @@ namespace penumbra::compression::detail {
 
 namespace {
 
+// The whole lane blocks of [0, count); the caller finishes the rest with scalar code (all of it
+// in a build without x86 kernels, where the lane branches below are compiled out).
+std::uint64_t lane_part(std::uint64_t count) { return lanes_active() ? count / kLanes * kLanes : 0; }
+
+#if PNB_X86_KERNELS
 PNB_LANES __m256 means8(__m256 lo, __m256 scale, const std::uint16_t* q) {
   return _mm256_add_ps(lo, _mm256_mul_ps(_mm256_cvtepi32_ps(widen16(q)), scale));
 }
@@ -23,9 +29,6 @@ PNB_LANES __m256 lookup(const float* table, __m256i index) { return _mm256_i32ga
 // Row indices times the row length: D8 rows are 8 floats (a shift), D_W rows `stride`.
 PNB_LANES __m256i rows8(const std::uint8_t* index) { return _mm256_slli_epi32(widen8(index), 3); }
 PNB_LANES __m256i rows(const std::uint8_t* index, __m256i stride) { return _mm256_mullo_epi32(widen8(index), stride); }
-
-// The whole lane blocks of [0, count); the caller finishes the rest with scalar code.
-std::uint64_t lane_part(std::uint64_t count) { return lanes_active() ? count / kLanes * kLanes : 0; }
 
 __attribute__((target("avx2"))) void add_entries_lanes(const float* table, std::int32_t stride,
                                                        const std::uint8_t* index, const float* base,
@@ -394,33 +397,41 @@ __attribute__((target("avx2"))) void aligned_step_values_lanes(float lo, float s
     store(out + i, _mm256_add_ps(means8(l, s, mean_q + i), lookup(table, o)));
   }
 }
+#endif  // PNB_X86_KERNELS
 
 }  // namespace
 
 void add_entries(const float* table, std::int32_t stride, const std::uint8_t* index, const float* base,
                  std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) add_entries_lanes(table, stride, index, base, i, out);
+#endif
   for (; i < count; ++i) out[i] = base[i] + table[std::ptrdiff_t(index[i]) * stride];
 }
 
 void add_rows8(const float* table, const std::int32_t* row, const float* base, std::uint64_t count, float* out,
                std::uint64_t stride, std::uint32_t steps) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) add_rows8_lanes(table, row, base, i, out, stride, steps);
+#endif
   for (; i < count; ++i)
     for (std::uint64_t k = 0; k < steps; ++k) out[k * stride + i] = base[i] + table[row[i] + std::ptrdiff_t(k)];
 }
 
 void add_offsets(const float* table, const std::int32_t* offset, const float* level, std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) add_offsets_lanes(table, offset, level, i, out);
+#endif
   for (; i < count; ++i) out[i] = aligned_value(level[i], table[offset[i]]);
 }
 
 // Eight steps of a row must share one block of D8 (window a multiple of 64).
 bool vq_window_applies(std::uint32_t window) { return window % 64 == 0 && lanes_active(); }
 
+#if PNB_X86_KERNELS
 bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
                const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
                std::uint64_t stride, std::uint32_t steps, const ResidualLanes* residual) {
@@ -444,18 +455,23 @@ bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* 
   }
   return true;
 }
+#endif  // PNB_X86_KERNELS
 
 void mean_plus_entries(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
                        std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) mean_plus_entries_lanes(lo, scale, mean_q, t8, i8, i, out);
+#endif
   for (; i < count; ++i) out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[std::ptrdiff_t(i8[i]) * 8];
 }
 
 void vq_step_values(float lo, float scale, const std::uint16_t* mean_q, const float* t8, const std::uint8_t* i8,
                     const float* tw, std::int32_t stride, const std::uint8_t* iw, std::uint64_t count, float* out) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) vq_step_values_lanes(lo, scale, mean_q, t8, i8, tw, stride, iw, i, out);
+#endif
   for (; i < count; ++i)
     out[i] = vq_value(dequantise_mean(lo, scale, mean_q[i]), t8[std::ptrdiff_t(i8[i]) * 8],
                       tw[std::ptrdiff_t(iw[i]) * stride]);
@@ -465,7 +481,9 @@ void aligned_step_values(float lo, float scale, const std::uint16_t* mean_q, con
                          const std::uint8_t* ia, const std::uint8_t* shift, std::int32_t stride, std::uint64_t count,
                          float* out) {
   std::uint64_t i = lane_part(count);
+#if PNB_X86_KERNELS
   if (i) aligned_step_values_lanes(lo, scale, mean_q, table, ia, shift, stride, i, out);
+#endif
   for (; i < count; ++i)
     out[i] = aligned_value(dequantise_mean(lo, scale, mean_q[i]), table[std::ptrdiff_t(ia[i]) * stride - shift[i]]);
 }

@@ -8,6 +8,8 @@
 #pragma once
 #include <cstdint>
 
+#include "cpu_features.h"
+
 namespace penumbra::compression::detail {
 
 /// out[i] = base[i] + table[index[i] * stride] for i < count (a D_W lookup of a full-window
@@ -38,15 +40,23 @@ bool vq_window_applies(std::uint32_t window);
 /// run of eight steps of its D_W row is one contiguous read, transposed in registers into the
 /// step rows; nothing is gathered. Returns false, doing nothing, where it does not apply (no
 /// lanes, fewer than 8 vertices, or a window that is not a multiple of 64, whose runs of eight
-/// steps would straddle two D8 blocks).
+/// steps would straddle two D8 blocks; always, in a build without x86 kernels).
 ///
 /// With `residual` (vertices 0..count-1 its lanes; count a multiple of 8, at most
 /// kResidualChunk), each value is written with its residual already added, as
 /// residual_window_lanes would add it: every row is written once instead of written, read back
 /// and written again.
+#if PNB_X86_KERNELS
 bool vq_window(float lo, float scale, const std::uint16_t* mean_q, const float* c8, const std::uint8_t* i8,
                const float* cw, std::uint32_t window, const std::uint8_t* iw, std::uint64_t count, float* out,
                std::uint64_t stride, std::uint32_t steps, const ResidualLanes* residual = nullptr);
+#else
+inline bool vq_window(float, float, const std::uint16_t*, const float*, const std::uint8_t*, const float*,
+                      std::uint32_t, const std::uint8_t*, std::uint64_t, float*, std::uint64_t, std::uint32_t,
+                      const ResidualLanes* = nullptr) {
+  return false;
+}
+#endif
 
 /// out[i] = dequantise_mean(lo, scale, mean_q[i]) + t8[i8[i] * 8] (mean + D8 of a block of steps;
 /// `t8` is the D8 codebook at the block's column).

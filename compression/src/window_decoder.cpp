@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bit_io.h"
+#include "cpu_features.h"
 #include "cursor_state.h"
 #include "lane_blocks.h"
 #include "page_checks.h"
@@ -76,10 +77,12 @@ void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
   special.clear();
   const std::uint8_t* widths = p.blocks.widths.data();
   std::uint64_t v = b;
+#if PNB_X86_KERNELS
   if (detail::lanes_active()) {
     v = b + (e - b) / detail::kLanes * detail::kLanes;
     detail::residual_step_lanes(p, t, b, v, out, special);
   }
+#endif
   for (; v < e; ++v) {
     if ((v & 15) == 0 && v + 16 <= e) {
       // Sparse residuals (most codes 0) skip 16 vertices per 8-byte load of their codes.
@@ -151,7 +154,8 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
 // kResidualChunk vertices at a time: their residual is unpacked first, then each VQ value is
 // written with it added (vq_window), so that every row is written once, not written by the VQ
 // pass and then read back and written again by the residual pass. Raw vertices are appended to
-// `special`. Returns where it stopped (b where it does not apply).
+// `special`. Returns where it stopped (b where it does not apply). x86 kernels only.
+#if PNB_X86_KERNELS
 std::uint64_t vq_residual_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* out,
                                 std::vector<std::uint64_t>& special) {
   // Checked before any chunk is unpacked, so that none is unpacked in vain.
@@ -169,6 +173,7 @@ std::uint64_t vq_residual_lanes(const EncodedPage& p, std::uint64_t b, std::uint
   }
   return end;
 }
+#endif  // PNB_X86_KERNELS
 
 // Every step of vertices [from, e) of a page.
 void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, float* out) {
@@ -176,7 +181,11 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
   const std::uint32_t n = p.step_count;
   thread_local std::vector<std::uint64_t> scalar;
   scalar.clear();
+#if PNB_X86_KERNELS
   const std::uint64_t b = is_vq(p) && has_residual(p) ? vq_residual_lanes(p, from, e, out, scalar) : from;
+#else
+  const std::uint64_t b = from;
+#endif
   if (b < e && is_vq(p) && !detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data(),
                                      p.i8.data() + b, p.cw.data(), p.window, p.iw.data() + b, e - b, out + b, N, n)) {
     // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
@@ -235,6 +244,7 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
   thread_local std::vector<std::uint32_t> scratch;
   scratch.resize(n);
   std::uint64_t v = b;
+#if PNB_X86_KERNELS
   if (detail::lanes_active()) {
     v = b + (e - b) / detail::kLanes * detail::kLanes;
     if (p.method == PageMethod::predictive)
@@ -242,6 +252,7 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
     else
       detail::residual_window_lanes(p, b, v, out, scalar);
   }
+#endif
   for (; v < e; ++v) scalar.push_back(v);
   detail::VertexSection s;
   for (const std::uint64_t u : scalar) {
