@@ -10,6 +10,11 @@ function(pnb_add_module name dir)
     $<BUILD_INTERFACE:${dir}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_compile_options(penumbra_${name} PRIVATE -Wall -Wextra)
+  # No fused multiply-add contraction, so that a module computes the same bits on every
+  # architecture: GCC contracts a * b + c wherever the baseline has FMA (aarch64, not x86-64; on
+  # aarch64 it fused products in mesh validation's orientation tests and in the cameras' set-up).
+  # Render and compression need it for reasons of their own too (their CMakeLists.txt).
+  target_compile_options(penumbra_${name} PRIVATE $<$<CXX_COMPILER_ID:GNU,Clang,AppleClang,IntelLLVM>:-ffp-contract=off>)
   install(TARGETS penumbra_${name} EXPORT PenumbraTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
