@@ -5,7 +5,7 @@
 # libraries. libopenmesh-dev:arm64 conflicts with the host's VTK development packages, so the
 # host's libopenmesh-dev gives the headers (the same on every architecture) and libopenmesh1:arm64
 # the library (cmake/toolchains/openmesh). Needs root or sudo. Idempotent: packages already
-# present are skipped quickly, and the arm64 architecture is added only once.
+# present are skipped quickly, and the arm64 architecture is added only once (scripts/apt_install.sh).
 set -euo pipefail
 packages=(
   cmake ninja-build
@@ -13,15 +13,5 @@ packages=(
   libopenmesh-dev nlohmann-json3-dev  # headers only: used as they are for arm64
   libpng-dev:arm64 libopenmesh1:arm64 libzstd-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
 )
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  SUDO=""
-  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  export DEBIAN_FRONTEND=noninteractive
-  dpkg --print-foreign-architectures | grep -qx arm64 || $SUDO dpkg --add-architecture arm64
-  $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+source "$(dirname "$0")/apt_install.sh"
+apt_install_missing "${packages[@]}"

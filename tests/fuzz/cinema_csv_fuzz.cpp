@@ -3,27 +3,19 @@
 // (CinemaDatabase::parse_csv, RFC 4180 quoting): any text gives a table whose rows all have the
 // header's width, or an Error naming the line.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "cinema_database.h"
-#include "penumbra/core/error.h"
+#include "fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     const auto table = penumbra::insitu::CinemaDatabase::parse_csv(text, "'data.csv'");
     for (const auto& row : table)
-      if (row.empty() || row.size() != table.front().size()) {
-        std::fprintf(stderr, "parse_csv returned a ragged table\n");
-        std::abort();
-      }
+      if (row.empty() || row.size() != table.front().size()) penumbra::fuzz::fail("parse_csv returned a ragged table");
   } catch (const penumbra::Error& e) {
-    if (e.code() != penumbra::ErrorCode::invalid_argument) {
-      std::fprintf(stderr, "parse_csv: unexpected error code: %s\n", e.what());
-      std::abort();
-    }
+    penumbra::fuzz::expect_code(e, penumbra::ErrorCode::invalid_argument, "parse_csv");
   }
   return 0;
 }

@@ -3,10 +3,9 @@
 // point that checks exactly what pnb_create checks of a config without opening a database or a
 // store: nothing is created or written, whatever the text says.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 
+#include "fuzz_util.h"
 #include "penumbra/penumbra.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -22,16 +21,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     case PNB_INVALID_ARGUMENT:
     case PNB_BACKEND_UNAVAILABLE:
-      if (message[0] == '\0') {
-        std::fprintf(stderr, "pnb_check_config failed with status %d and no message\n", static_cast<int>(status));
-        std::abort();
-      }
+      if (message[0] == '\0')
+        penumbra::fuzz::fail("pnb_check_config failed with status " + std::to_string(status) + " and no message");
       break;
     default:
       // A config text can only be wrong, or ask for what no backend runs; anything else
       // (out of memory, an internal error, an I/O error without a file) is a bug.
-      std::fprintf(stderr, "pnb_check_config: unexpected status %d: %s\n", static_cast<int>(status), message);
-      std::abort();
+      penumbra::fuzz::fail("pnb_check_config: unexpected status " + std::to_string(status) + ": " + message);
   }
   return 0;
 }

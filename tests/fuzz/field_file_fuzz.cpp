@@ -9,8 +9,6 @@
 // decoded per input.
 #include <algorithm>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -68,10 +66,7 @@ std::vector<std::uint8_t> with_checksums(std::vector<std::uint8_t> b) {
   return b;
 }
 
-[[noreturn]] void bug(const std::string& what) {
-  std::fprintf(stderr, "field file: %s\n", what.c_str());
-  std::abort();
-}
+[[noreturn]] void bug(const std::string& what) { penumbra::fuzz::fail("field file: " + what); }
 
 /// Loads and decodes what `f` lists, within the budget.
 void decode(const CompressedField& f) {
@@ -122,7 +117,7 @@ void read(const std::vector<std::uint8_t>& bytes) {
       options.recover_incomplete = recover;
       f = CompressedField::open(path, options);
     } catch (const penumbra::Error& e) {
-      if (e.code() != penumbra::ErrorCode::io_error) bug(std::string("open: unexpected error code: ") + e.what());
+      penumbra::fuzz::expect_code(e, penumbra::ErrorCode::io_error, "field file: open");
       continue;
     }
     decode(*f);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/fuzz/fuzz_util.h -- what several harnesses share: a temporary folder of the process's own
-// for the readers that take a path, and little-endian field access for the binary formats
+// for the readers that take a path, how a harness reports a bug, and little-endian field access
+// for the binary formats
 #pragma once
 #include <stdlib.h>
 
@@ -10,6 +11,8 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "penumbra/core/error.h"
 
 namespace penumbra::fuzz {
 
@@ -45,6 +48,17 @@ inline void write_file(const std::string& path, const void* data, std::size_t si
     std::perror(("pnb fuzz: cannot write " + path).c_str());
     std::abort();
   }
+}
+
+/// Reports a bug of the code under test and stops: libFuzzer keeps the input that got here.
+[[noreturn]] inline void fail(const std::string& what) {
+  std::fprintf(stderr, "%s\n", what.c_str());
+  std::abort();
+}
+
+/// An Error is a reader's right answer to bad bytes, but only with the code it documents for them.
+inline void expect_code(const Error& e, ErrorCode code, const std::string& reader) {
+  if (e.code() != code) fail(reader + ": unexpected error code: " + e.what());
 }
 
 template <class T>

@@ -5,8 +5,6 @@
 // Text whose first non-blank character is '<' is written as `list.pvd`, anything else as
 // `list.series`, in a folder that also holds `a.vtk`, `b.vtu` and `c.vtk` for them to list.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -26,10 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   penumbra::fuzz::write_file(path, data, size);
   try {
     const auto series = penumbra::replay::InputSeries::open(path);
-    if (series->size() < 1) {
-      std::fprintf(stderr, "InputSeries::open gave a series without steps\n");
-      std::abort();
-    }
+    if (series->size() < 1) penumbra::fuzz::fail("InputSeries::open gave a series without steps");
     (void)series->describe();
   } catch (const penumbra::Error&) {
   }

@@ -3,28 +3,20 @@
 // StoredRun::open calls on the file): (cycle, finite time) per line, or an Error naming the line.
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <sstream>
 #include <string>
 
-#include "penumbra/core/error.h"
+#include "fuzz_util.h"
 #include "steps_csv.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   try {
     for (const auto& [cycle, time] : penumbra::insitu::parse_steps_csv(in, "steps.csv"))
-      if (!std::isfinite(time)) {
-        std::fprintf(stderr, "parse_steps_csv returned a time that is not finite (cycle %lld)\n",
-                     static_cast<long long>(cycle));
-        std::abort();
-      }
+      if (!std::isfinite(time))
+        penumbra::fuzz::fail("parse_steps_csv returned a time that is not finite (cycle " + std::to_string(cycle) + ")");
   } catch (const penumbra::Error& e) {
-    if (e.code() != penumbra::ErrorCode::io_error) {
-      std::fprintf(stderr, "parse_steps_csv: unexpected error code: %s\n", e.what());
-      std::abort();
-    }
+    penumbra::fuzz::expect_code(e, penumbra::ErrorCode::io_error, "parse_steps_csv");
   }
   return 0;
 }

@@ -4,8 +4,6 @@
 // validate_mesh, as penumbra-replay publishes it. Each input is read as it is and again with its
 // FNV-1a checksum made right, so that mutations get past the checksum to the counts and offsets.
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <vector>
 
 #include "fuzz_util.h"
@@ -21,16 +19,11 @@ void read(const std::vector<std::uint8_t>& bytes) {
   try {
     mesh = penumbra::insitu::parse_stored_mesh(bytes.data(), bytes.size(), "mesh.pnbm");
   } catch (const Error& e) {
-    if (e.code() != penumbra::ErrorCode::io_error) {
-      std::fprintf(stderr, "parse_stored_mesh: unexpected error code: %s\n", e.what());
-      std::abort();
-    }
+    penumbra::fuzz::expect_code(e, penumbra::ErrorCode::io_error, "parse_stored_mesh");
     return;
   }
-  if (mesh.xyz.size() % 3 != 0 || mesh.offsets.size() != mesh.types.size() + 1) {
-    std::fprintf(stderr, "parse_stored_mesh returned inconsistent arrays\n");
-    std::abort();
-  }
+  if (mesh.xyz.size() % 3 != 0 || mesh.offsets.size() != mesh.types.size() + 1)
+    penumbra::fuzz::fail("parse_stored_mesh returned inconsistent arrays");
   try {
     penumbra::validate_mesh(mesh.view(), "stored mesh");
   } catch (const Error&) {
