@@ -242,9 +242,12 @@ float phong_factor(ivec4 wv) {
   vec3 e1 = point_at(wv.y) - p0, e2 = point_at(wv.z) - p0, e3 = point_at(wv.w) - p0;
   float s0 = scalars[wv.x];
   vec3 g = cross(e2, e3) * (scalars[wv.y] - s0) + cross(e3, e1) * (scalars[wv.z] - s0) + cross(e1, e2) * (scalars[wv.w] - s0);
-  float gl = length(g);
-  if (!(gl > 0.0) || isinf(gl) || isnan(gl)) return u_phong.x + u_phong.y;
-  vec3 n = g / gl, view = -g_d;
+  // Scaled by its largest component first: length() squares it, which would leave float32's
+  // range for gradients whose size is far from 1 although their direction is well defined.
+  float gmax = max(max(abs(g.x), abs(g.y)), abs(g.z));
+  if (!(gmax > 0.0) || isinf(gmax) || isnan(gmax)) return u_phong.x + u_phong.y;
+  g /= gmax;
+  vec3 n = g / length(g), view = -g_d;
   vec3 l = u_headlight != 0 ? view : u_to_light;
   vec3 h = l + view;
   float hl = length(h);

@@ -161,6 +161,7 @@ TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
     m.points[i] = view.point(i);
     m.bounds.extend(m.points[i]);
   }
+  m.frame = LocalFrame::of(m.bounds);
   const auto canon = weld_points(m.points, m.welded_points);
   split_cells(view, canon, m);
   require(m.tets.size() < static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4),

@@ -102,11 +102,11 @@ GpuMeshLayout build_gpu_mesh_layout(const TetMesh& m) {
   require(m.points.size() < (std::size_t{1} << 31) / 3,
           "GpuRayCaster: mesh has " + std::to_string(m.points.size()) + " points; at most 715827882 fit int32 indexing");
   GpuMeshLayout g;
-  g.center = m.bounds.center();
-  g.diagonal = m.bounds.diagonal();
+  g.frame = m.frame;
+  g.diagonal = g.frame.length(m.bounds.diagonal());
   g.points.resize(m.points.size() * 3);
   for (std::size_t i = 0; i < m.points.size(); ++i) {
-    const Vec3d p = m.points[i] - g.center;
+    const Vec3d p = g.frame.point(m.points[i]);
     for (int a = 0; a < 3; ++a) g.points[3 * i + static_cast<std::size_t>(a)] = static_cast<float>(p[a]);
   }
 

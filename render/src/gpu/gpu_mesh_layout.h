@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "penumbra/core/vec3.h"
+#include "penumbra/core/local_frame.h"
 #include "penumbra/render/tet_mesh.h"
 
 namespace penumbra::render::gpu {
@@ -22,10 +22,10 @@ static_assert(sizeof(BvhNode) == 32);
 
 /// Everything the ray-casting shader reads about a mesh, in float32 and int32.
 struct GpuMeshLayout {
-  /// Points are stored relative to the bounds' centre, so float32 keeps the precision of the
-  /// mesh's own size wherever the mesh sits in space.
-  Vec3d center;
-  double diagonal = 0;
+  /// Points, boxes and every length are in the mesh's local frame (TetMesh::frame), so float32
+  /// keeps the precision of the mesh's own size wherever it sits and whatever its size.
+  LocalFrame frame;
+  double diagonal = 0;                                   ///< of the bounds, in the frame
   std::vector<float> points;                             ///< x, y, z per point
   std::vector<std::array<std::int32_t, 4>> tet_vertices; ///< point ids, tets in Morton order
   /// Per face k: (neighbour << 2 | index of the shared face in the neighbour), -1 on the boundary.

@@ -36,8 +36,8 @@ constexpr std::size_t kScalarBlock = 1 << 14;  // field values compared and re-s
 struct GpuRayCaster::Impl {
   std::shared_ptr<GpuDevice> device;
   std::shared_ptr<const TetMesh> mesh;
-  Vec3d center;
-  double diagonal = 0;
+  LocalFrame frame;    ///< of the mesh: every float32 position and length the shader sees
+  double diagonal = 0;  ///< of the mesh's bounds, in the frame
   std::size_t triangle_count = 0;
   GLuint buffers[kBindingCount] = {};
   std::size_t capacity[kBindingCount] = {};
@@ -113,7 +113,7 @@ GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<co
   m.device = std::move(device);
   m.mesh = std::move(mesh);
   const gpu::GpuMeshLayout layout = gpu::build_gpu_mesh_layout(*m.mesh);
-  m.center = layout.center;
+  m.frame = layout.frame;
   m.diagonal = layout.diagonal;
   m.triangle_count = layout.triangles.size();
 
@@ -177,7 +177,7 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const double opacity = options.early_termination_opacity;
   require(!options.shading.light_at, "GpuRayCaster::render: image-space light (Shading::light_at) is evaluated by the "
                                      "CPU ray caster only; give a per-point light_rgb instead");
-  const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf);
+  const gpu::GpuTfLayout table = gpu::build_gpu_tf_layout(tf, m.frame.scale);
 
   GpuDevice::Impl& d = m.dev();
   CurrentContext current(d);
@@ -205,11 +205,11 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels] + m.capacity[kLight];
   for (GLuint b = 0; b < kBindingCount; ++b) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, m.buffers[b]);
 
-  // The camera of Camera::primary_ray, relative to the mesh centre like the points.
+  // The camera of Camera::primary_ray, in the mesh's frame like the points.
   const Camera::Frame frame = camera.frame();
   const Vec3d &forward = frame.forward, &right = frame.right, &up = frame.up;
   const double half_h = frame.half_height, half_w = frame.half_width;
-  const Vec3d eye = camera.eye - m.center;
+  const Vec3d eye = m.frame.point(camera.eye);
   const Bounds& bb = m.mesh->bounds;
   const double pad = 1e-9 * bb.diagonal();
   const Vec3d& o = camera.eye;

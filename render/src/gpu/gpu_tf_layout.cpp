@@ -8,7 +8,7 @@
 
 namespace penumbra::render::gpu {
 
-GpuTfLayout build_gpu_tf_layout(const TransferFunction& tf) {
+GpuTfLayout build_gpu_tf_layout(const TransferFunction& tf, double length_scale) {
   GpuTfLayout out;
   const std::vector<double> x = tf.breakpoints();
   const std::size_t n = x.size();
@@ -40,8 +40,8 @@ GpuTfLayout build_gpu_tf_layout(const TransferFunction& tf) {
     const double lo = p == 0 ? x[0] : x[p - 1], hi = p == n ? x[n - 1] : x[p];
     const bool empty = tau_ref + tau1 * (lo - s_ref) <= 0.0 && tau_ref + tau1 * (hi - s_ref) <= 0.0;
     q[0] = static_cast<float>(s_ref);
-    q[1] = static_cast<float>(tau_ref);
-    q[2] = static_cast<float>(tau1);
+    q[1] = static_cast<float>(tau_ref * length_scale);
+    q[2] = static_cast<float>(tau1 * length_scale);
     q[3] = empty ? 1.0f : 0.0f;
     for (int i = 0; i < 3; ++i) {
       q[4 + i] = static_cast<float>(col_ref[i]);

@@ -19,7 +19,9 @@ struct GpuTfLayout {
   int breakpoint_count = 0;
 };
 
-GpuTfLayout build_gpu_tf_layout(const TransferFunction& tf);
+/// Extinction is written per unit of a frame `length_scale` world units long (LocalFrame::scale),
+/// converted in double: float32 then holds it for any world unit the transfer function uses.
+GpuTfLayout build_gpu_tf_layout(const TransferFunction& tf, double length_scale = 1.0);
 
 /// The coefficients c[n][j] (n, j <= 7, at n * 8 + j) of the double series of 1 - Z(a, b) in a
 /// and k = (b - a)/2 (segment_integral.h), with c[0][0] dropped and signs flipped.

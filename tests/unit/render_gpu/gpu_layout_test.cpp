@@ -80,13 +80,25 @@ TEST(GpuMeshLayout, BvhHoldsEveryBoundaryTriangleOnceInsideItsBoxes) {
   for (int s : seen) EXPECT_EQ(s, 1);
 }
 
-TEST(GpuMeshLayout, PointsAreStoredAroundTheCentre) {
+TEST(GpuMeshLayout, PointsAreStoredInTheLocalFrame) {
   auto owned = fixtures::block(fixtures::BlockCells::tets, 2, 2, 2, {1e6, 1e6, 1e6}, {1e6 + 1, 1e6 + 1, 1e6 + 1});
   const auto mesh = render::prepare_tet_mesh(owned.view());
   const auto g = render::gpu::build_gpu_mesh_layout(mesh);
+  EXPECT_EQ(g.frame.scale, 2.0);  // the power of two at least the diagonal, sqrt(3)
   for (std::size_t i = 0; i < mesh.points.size(); ++i)
-    for (int a = 0; a < 3; ++a)  // exact: offsets of 0, 0.5, 1 from 1e6 + 0.5
-      EXPECT_EQ(double(g.points[3 * i + a]), mesh.points[i][a] - (1e6 + 0.5));
+    for (int a = 0; a < 3; ++a)  // exact: offsets of 0, 0.5, 1 from 1e6 + 0.5, halved
+      EXPECT_EQ(double(g.points[3 * i + a]), (mesh.points[i][a] - (1e6 + 0.5)) / 2);
+}
+
+TEST(GpuMeshLayout, AnyMeshSizeGivesLocalCoordinatesWithinHalfAUnit) {
+  for (double size : {1e-30, 1e-12, 1.0, 1e12, 1e30}) {
+    auto owned = fixtures::block(fixtures::BlockCells::tets, 2, 2, 2, {-size, 3 * size, 0}, {size, 4 * size, 2 * size});
+    const auto mesh = render::prepare_tet_mesh(owned.view());
+    const auto g = render::gpu::build_gpu_mesh_layout(mesh);
+    EXPECT_GT(g.diagonal, 0.5) << size;
+    EXPECT_LE(g.diagonal, 1.0) << size;
+    for (float v : g.points) EXPECT_LE(std::fabs(v), 0.5f) << size;
+  }
 }
 
 TEST(GpuTfLayout, PiecesReproduceTheTransferFunction) {
@@ -107,6 +119,19 @@ TEST(GpuTfLayout, PiecesReproduceTheTransferFunction) {
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(q[4 + i] + q[8 + i] * ds, c[i], 1e-5) << s;
     EXPECT_EQ(q[3] != 0.0f, s < 995.0) << s;  // only below 995 is the extinction zero throughout
   }
+}
+
+TEST(GpuTfLayout, ExtinctionIsPerUnitOfTheFrame) {
+  // 3e12 per world unit (a nanometre-sized mesh in metres) in a frame 2^-40 world units long:
+  // about 2.7 per frame unit, converted in double before float32 holds it.
+  render::TransferFunction tf;
+  tf.colors = {{0.0, 1.0, 1.0, 1.0}};
+  tf.opacities = {{0.0, 3e12}, {1.0, 6e12}};
+  const double scale = std::ldexp(1.0, -40);
+  const auto t = render::gpu::build_gpu_tf_layout(tf, scale);
+  const float* inner = &t.data[render::gpu::kTfPieceFloats];  // the piece [0, 1]
+  EXPECT_FLOAT_EQ(inner[1], static_cast<float>(3e12 * scale));
+  EXPECT_FLOAT_EQ(inner[2], static_cast<float>(3e12 * scale));
 }
 
 TEST(GpuTfLayout, SeriesCoefficientsGiveOneMinusZ) {

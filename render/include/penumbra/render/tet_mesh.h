@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "penumbra/core/local_frame.h"
 #include "penumbra/core/mesh_view.h"
 #include "penumbra/core/vec3.h"
 
@@ -33,6 +34,7 @@ struct TetMesh {
   std::vector<std::int64_t> source_cell;              ///< input cell each tet came from
   std::vector<BoundaryFace> boundary;                 ///< unmatched faces
   Bounds bounds;
+  LocalFrame frame;                  ///< where float32 copies of the mesh live (the GPU paths)
   std::size_t welded_points = 0;     ///< duplicate points merged for adjacency
   std::size_t reoriented_tets = 0;   ///< input tets whose orientation was flipped
   std::uint64_t topology_version = 0;
