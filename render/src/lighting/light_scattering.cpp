@@ -20,7 +20,9 @@ std::vector<float> scatter_weights(const TetMesh& mesh, const Level1Topology& to
       double inv_sum = 0;
       for (auto s = s0; s < s1; ++s) {
         const auto q = static_cast<std::size_t>(topology.edge_ids[static_cast<std::size_t>(s)]);
-        const Vec3d dv = mesh.points[q] - mesh.points[p];
+        // In the mesh's frame (a power-of-two scale: the weights do not change), so that 1 / d^2
+        // fits float32 for a mesh of any size.
+        const Vec3d dv = (mesh.points[q] - mesh.points[p]) / mesh.frame.scale;
         const double d2 = dot(dv, dv);
         const double inv = d2 > 0 ? 1.0 / d2 : 0.0;
         w[static_cast<std::size_t>(s)] = static_cast<float>(inv);

@@ -71,16 +71,19 @@ struct GpuLightSolver::Impl {
   std::shared_ptr<GpuDevice> device;
   const TetMesh* mesh = nullptr;
   std::size_t points = 0;
-  Vec3d centre;  // the kernels work relative to the mesh centre (float32)
+  // The kernels work in the mesh's local frame (float32): positions, lengths and the extinction
+  // table; the level-0 grid holds extinction per world unit, so the level-0 kernel gets the
+  // frame's scale in its sigma_a.
+  LocalFrame frame;
   GLuint level0_program = 0, level1_program = 0, scatter_program = 0;
   // Mesh (uploaded once).
   Buffer mesh_points, tets, neighbors, incidence, edges, weights;
   // Field and grid.
   Buffer point_scalars, params, grid_tau, grid_mask, counters;
-  std::vector<float> occluder_boxes;  // lo.xyz, hi.xyz per box, relative to the centre
+  std::vector<float> occluder_boxes;  // lo.xyz, hi.xyz per box, in the frame
   int breakpoint_count = 0, occluder_offset = 0;
   std::array<int, 3> dims{0, 0, 0};
-  Vec3d grid_lo, spacing;
+  Vec3d grid_lo, spacing;  // of the level-0 grid, in world units
   // Scattering: source and two iterates (ping-pong).
   Buffer pre, iterate[2];
   int current = 0;
@@ -181,7 +184,7 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
   m.device = std::move(device);
   m.mesh = &mesh;
   m.points = mesh.points.size();
-  m.centre = (mesh.bounds.lo + mesh.bounds.hi) * 0.5;
+  m.frame = mesh.frame;
   GpuDevice::Impl& d = m.dev();
   if (d.max_compute_storage_blocks < static_cast<std::int64_t>(kLevel1Bindings))
     throw Error(ErrorCode::backend_unavailable, "GPU light volume: the device allows " +
@@ -189,21 +192,21 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
                                                     " storage buffers per compute shader; " +
                                                     std::to_string(kLevel1Bindings) + " are needed");
   for (const Bounds& b : occluders) {
-    const Vec3d lo = b.lo - m.centre, hi = b.hi - m.centre;
+    const Vec3d lo = m.frame.point(b.lo), hi = m.frame.point(b.hi);
     for (double v : {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) m.occluder_boxes.push_back(static_cast<float>(v));
   }
 
-  // Mesh layout: float32 xyz relative to the centre with the longest incident edge in w; tet
+  // Mesh layout: float32 xyz in the frame with the longest incident edge in w; tet
   // vertices and neighbours as ivec4; a point's incident tets (4 tet + local) and edge
   // neighbours behind their offsets (offsets shifted past the offset table itself).
   const std::size_t np = m.points;
   std::vector<float> pts(4 * np);
   for (std::size_t p = 0; p < np; ++p) {
-    const Vec3d r = mesh.points[p] - m.centre;
+    const Vec3d r = m.frame.point(mesh.points[p]);
     pts[4 * p] = static_cast<float>(r.x);
     pts[4 * p + 1] = static_cast<float>(r.y);
     pts[4 * p + 2] = static_cast<float>(r.z);
-    pts[4 * p + 3] = p < topology.longest_edge.size() ? topology.longest_edge[p] : 0.0f;
+    pts[4 * p + 3] = p < topology.longest_edge.size() ? static_cast<float>(m.frame.length(topology.longest_edge[p])) : 0.0f;
   }
   // Tets as the CPU walk's records (in its Morton order, neighbours as record << 2 | face), and
   // each point's star as (record << 2 | local index, the opposite face's vertices outward).
@@ -275,7 +278,7 @@ GpuLightSolver::~GpuLightSolver() {
 void GpuLightSolver::set_grid(const Level0Grid& grid) {
   Impl& m = *m_impl;
   m.dims = grid.dims();
-  m.grid_lo = grid.lo() - m.centre;
+  m.grid_lo = grid.lo();
   m.spacing = grid.spacing();
   const auto& mask = grid.mask();
   std::vector<std::uint32_t> packed((mask.size() + 3) / 4, 0u);
@@ -297,8 +300,8 @@ void GpuLightSolver::set_field(const Level0Grid& grid, const Level1Field& field)
   std::vector<float> params(3 * n + 2);
   for (std::size_t i = 0; i < n; ++i) params[i] = static_cast<float>(x[i]);
   for (std::size_t p = 0; p <= n; ++p) {
-    params[n + p] = static_cast<float>(table.intercept(p));
-    params[2 * n + 1 + p] = static_cast<float>(table.slope(p));
+    params[n + p] = static_cast<float>(m.frame.extinction(table.intercept(p)));
+    params[2 * n + 1 + p] = static_cast<float>(m.frame.extinction(table.slope(p)));
   }
   m.breakpoint_count = static_cast<int>(n);
   m.occluder_offset = static_cast<int>(params.size());
@@ -339,10 +342,10 @@ void GpuLightSolver::solve_level0(GpuLightBuffers& buffers, const Light& light, 
     w_dir = w_dir / sum;
     ds_dir = 1.0 / sum;
   } else {
-    const Vec3d lo = m.grid_lo + m.centre;
+    const Vec3d& lo = m.grid_lo;
     for (int a = 0; a < 3; ++a)
       centre[a] = static_cast<int>(std::clamp(std::lround((light.vector[a] - lo[a]) / h[a]), -1L, static_cast<long>(dims[a])));
-    light_rel = light.vector - lo;
+    light_rel = (light.vector - lo) / m.frame.scale;
   }
   // Wavefronts m = |i - c_i| + |j - c_j| + |k - c_k| from the nearest node to the farthest.
   int level_lo = 0, level_hi = 0;
@@ -360,11 +363,11 @@ void GpuLightSolver::solve_level0(GpuLightBuffers& buffers, const Light& light, 
   Impl::set3i(gl, prog, "u_dims", dims);
   Impl::set3i(gl, prog, "u_centre", centre);
   Impl::set1i(gl, prog, "u_point", point ? 1 : 0);
-  Impl::set3f(gl, prog, "u_spacing", h);
+  Impl::set3f(gl, prog, "u_spacing", h / m.frame.scale);
   Impl::set3f(gl, prog, "u_light", light_rel);
   Impl::set3f(gl, prog, "u_w_dir", w_dir);
-  Impl::set1f(gl, prog, "u_ds_dir", ds_dir);
-  Impl::set1f(gl, prog, "u_sigma_a", sigma_a);
+  Impl::set1f(gl, prog, "u_ds_dir", m.frame.length(ds_dir));
+  Impl::set1f(gl, prog, "u_sigma_a", m.frame.extinction(sigma_a));  // the grid's tau is per world unit
   gl.UseProgram(prog);
   const GLint level = Impl::loc(gl, prog, "u_level");
   const std::size_t rows = static_cast<std::size_t>(dims[1]) * dims[2];
@@ -415,15 +418,15 @@ double GpuLightSolver::level1_pass(GpuLightBuffers& buffers, const Light& light,
   m.clear_counters(gl);
   Impl::set1i(gl, prog, "u_group_offset", static_cast<long long>(buffers.ordered));
   Impl::set1i(gl, prog, "u_point", point ? 1 : 0);
-  Impl::set3f(gl, prog, "u_light", point ? light.vector - m.centre : normalize(light.vector));
+  Impl::set3f(gl, prog, "u_light", point ? m.frame.point(light.vector) : normalize(light.vector));
   Impl::set1f(gl, prog, "u_sigma_a", ctx.sigma_a);
-  Impl::set1f(gl, prog, "u_step", ctx.step);
+  Impl::set1f(gl, prog, "u_step", m.frame.length(ctx.step));
   Impl::set1i(gl, prog, "u_adaptive", ctx.adaptive ? 1 : 0);
-  Impl::set3f(gl, prog, "u_box_lo", m.mesh->bounds.lo - m.centre);
-  Impl::set3f(gl, prog, "u_box_hi", m.mesh->bounds.hi - m.centre);
+  Impl::set3f(gl, prog, "u_box_lo", m.frame.point(m.mesh->bounds.lo));
+  Impl::set3f(gl, prog, "u_box_hi", m.frame.point(m.mesh->bounds.hi));
   Impl::set3i(gl, prog, "u_dims", m.dims);
-  Impl::set3f(gl, prog, "u_grid_lo", m.grid_lo);
-  Impl::set3f(gl, prog, "u_spacing", m.spacing);
+  Impl::set3f(gl, prog, "u_grid_lo", m.frame.point(m.grid_lo));
+  Impl::set3f(gl, prog, "u_spacing", m.spacing / m.frame.scale);
   Impl::set1i(gl, prog, "u_breakpoints", m.breakpoint_count);
   Impl::set1i(gl, prog, "u_occluders", static_cast<long long>(m.occluder_boxes.size() / 6));
   Impl::set1i(gl, prog, "u_occluder_offset", m.occluder_offset);
