@@ -16,6 +16,7 @@
 
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
+#include "penumbra/core/local_frame.h"
 #include "penumbra/render/gpu_occlusion.h"
 
 namespace penumbra::render {
@@ -34,10 +35,12 @@ enum Binding : GLuint { kLevels, kInfos, kSchedule, kPoints, kResult, kGrid, kBi
 constexpr int kLocalSize = 64;  // cone_trace.comp's local_size_x
 constexpr double kPi = 3.14159265358979323846;
 
-std::vector<float> relative_xyz(const std::vector<Vec3d>& points, const Vec3d& origin) {
+std::vector<float> local_xyz(const std::vector<Vec3d>& points, const LocalFrame& frame) {
   std::vector<float> xyz(3 * points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    for (int a = 0; a < 3; ++a) xyz[3 * i + static_cast<std::size_t>(a)] = static_cast<float>(points[i][a] - origin[a]);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3d p = frame.point(points[i]);
+    for (int a = 0; a < 3; ++a) xyz[3 * i + static_cast<std::size_t>(a)] = static_cast<float>(p[a]);
+  }
   return xyz;
 }
 
@@ -50,12 +53,14 @@ struct GpuExtinctionPyramid::Impl {
   const ExtinctionPyramid* host = nullptr;
   GLuint program = 0;
   DeviceBuffer levels, infos;
-  Vec3d origin;  ///< bounds centre: device positions are relative to it
+  /// The frame of the pyramid's bounds: device positions and lengths are in it; the levels hold
+  /// extinction per world unit, so the schedule's kappa carries the frame's scale.
+  LocalFrame frame;
   /// A mesh's points, sent once and shared by every tracer on this pyramid across updates (the
-  /// mesh is kept alive so that its address is never reused; re-sent if the origin moves).
+  /// mesh is kept alive so that its address is never reused; re-sent if the frame moves).
   DeviceBuffer mesh_points;
   std::shared_ptr<const TetMesh> mesh_held;
-  Vec3d mesh_origin;
+  LocalFrame mesh_frame;
   std::vector<char> mesh_used;  ///< per point: does a tet use it
 
   /// Makes mesh_points hold `mesh`'s points; call with the context current.
@@ -71,8 +76,7 @@ struct GpuExtinctionPyramid::Impl {
 void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
   require(pyramid.levels() >= 1, "GpuExtinctionPyramid: the extinction pyramid is empty");
   const auto t0 = Clock::now();
-  const Bounds& b = pyramid.bounds();
-  const Vec3d centre = (b.lo + b.hi) * 0.5;
+  const LocalFrame local = LocalFrame::of(pyramid.bounds());
   // The levels, then the unfiltered grid (ExtinctionPyramid::fine()) at index levels().
   const int count = pyramid.levels() + 1;
   auto level_at = [&](int l) -> const PyramidLevel& { return l < pyramid.levels() ? pyramid.level(l) : pyramid.fine(); };
@@ -92,8 +96,8 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
     Info& in = info[static_cast<std::size_t>(l)];
     for (int a = 0; a < 3; ++a) {
       in.dims_offset[a] = lev.dims[static_cast<std::size_t>(a)];
-      in.lo[a] = static_cast<float>(lev.lo[a] - centre[a]);
-      in.inv_spacing[a] = static_cast<float>(1.0 / lev.spacing[a]);
+      in.lo[a] = static_cast<float>(local.point(lev.lo)[a]);
+      in.inv_spacing[a] = static_cast<float>(1.0 / local.length(lev.spacing[a]));
     }
     in.dims_offset[3] = static_cast<GLint>(offset);
     in.lo[3] = lev.empty_beyond_nodes ? 1.0f : 0.0f;
@@ -114,15 +118,16 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
   gl.NamedBufferSubData(infos.name, 0, static_cast<GLsizeiptr>(info.size() * sizeof(Info)), info.data());
   host = &pyramid;
   ++generation;
-  origin = centre;
+  frame = local;
   level_bytes = values * sizeof(float);
   upload_ms = ms_since(t0);
 }
 
 void GpuExtinctionPyramid::Impl::hold_mesh(const GlApi& gl, const std::shared_ptr<const TetMesh>& mesh) {
-  const bool same_origin = mesh_origin.x == origin.x && mesh_origin.y == origin.y && mesh_origin.z == origin.z;
-  if (mesh_held == mesh && same_origin) return;
-  const std::vector<float> xyz = relative_xyz(mesh->points, origin);
+  const bool same_frame = mesh_frame.center.x == frame.center.x && mesh_frame.center.y == frame.center.y &&
+                          mesh_frame.center.z == frame.center.z && mesh_frame.scale == frame.scale;
+  if (mesh_held == mesh && same_frame) return;
+  const std::vector<float> xyz = local_xyz(mesh->points, frame);
   mesh_held.reset();
   mesh_points.reserve(gl, dev(), xyz.size() * sizeof(float), "GpuExtinctionPyramid", "mesh points");
   gl.NamedBufferSubData(mesh_points.name, 0, static_cast<GLsizeiptr>(xyz.size() * sizeof(float)), xyz.data());
@@ -130,7 +135,7 @@ void GpuExtinctionPyramid::Impl::hold_mesh(const GlApi& gl, const std::shared_pt
   for (const auto& t : mesh->tets)
     for (auto v : t) mesh_used[static_cast<std::size_t>(v)] = 1;
   mesh_held = mesh;
-  mesh_origin = origin;
+  mesh_frame = frame;
 }
 
 GpuExtinctionPyramid::GpuExtinctionPyramid(std::shared_ptr<GpuDevice> device, const ExtinctionPyramid& pyramid)
@@ -206,21 +211,21 @@ struct GpuConeTracer::Impl {
 
 void GpuConeTracer::Impl::set_cone_uniforms(const GlApi& gl, const ConeTarget& target) const {
   const GLuint p = pyr().program;
-  const Vec3d& o = pyr().origin;
+  const LocalFrame& frame = pyr().frame;
   auto u3 = [&](const char* name, const Vec3d& v) {
     gl.ProgramUniform3f(p, uniform(gl, name), static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
   };
   int kind = 0;
-  Vec3d vector = target.eye - o, spot_dir{0, 0, 1};
+  Vec3d vector = frame.point(target.eye), spot_dir{0, 0, 1};
   double spot_cos = -2.0;  // lights everything
   if (target.kind == ConeTarget::Kind::light) {
     const ShadowLight& l = target.light;
     if (l.kind == ShadowLight::Kind::directional) {
       kind = 1;
-      vector = -l.vector;
+      vector = -normalize(l.vector);  // any length: normalised in double
     } else {
       kind = l.kind == ShadowLight::Kind::point ? 2 : 3;
-      vector = l.vector - o;
+      vector = frame.point(l.vector);
       if (kind == 3) {
         const double sl = length(l.spot_direction);
         if (sl > 0) {
@@ -237,8 +242,8 @@ void GpuConeTracer::Impl::set_cone_uniforms(const GlApi& gl, const ConeTarget& t
   u3("u_spot_dir", spot_dir);
   gl.ProgramUniform1f(p, uniform(gl, "u_spot_cos"), static_cast<float>(spot_cos));
   gl.ProgramUniform1i(p, uniform(gl, "u_schedule_count"), schedule_count);
-  gl.ProgramUniform1f(p, uniform(gl, "u_gap"), static_cast<float>(host->gap()));
-  gl.ProgramUniform1f(p, uniform(gl, "u_length"), static_cast<float>(host->length()));
+  gl.ProgramUniform1f(p, uniform(gl, "u_gap"), static_cast<float>(frame.length(host->gap())));
+  gl.ProgramUniform1f(p, uniform(gl, "u_length"), static_cast<float>(frame.length(host->length())));
   gl.ProgramUniform1f(p, uniform(gl, "u_lateral3"), static_cast<float>(host->lateral_variance_ratio(3)));
   gl.ProgramUniform1f(p, uniform(gl, "u_lateral7"), static_cast<float>(host->lateral_variance_ratio(7)));
   // Sub-cone axes as ConeTracer's constructor makes them (thesis fig. 3.5 packings).
@@ -260,10 +265,11 @@ void GpuConeTracer::Impl::set_cone_uniforms(const GlApi& gl, const ConeTarget& t
 
 void GpuConeTracer::Impl::set_grid_uniforms(const GlApi& gl, const GpuPreIllumination& g) const {
   const GLuint p = pyr().program;
-  const Vec3d lo = g.lo - pyr().origin;
+  const LocalFrame& frame = pyr().frame;
+  const Vec3d lo = frame.point(g.lo), spacing = g.spacing / frame.scale;
   gl.ProgramUniform3f(p, uniform(gl, "u_grid_lo"), static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z));
-  gl.ProgramUniform3f(p, uniform(gl, "u_grid_spacing"), static_cast<float>(g.spacing.x), static_cast<float>(g.spacing.y),
-                      static_cast<float>(g.spacing.z));
+  gl.ProgramUniform3f(p, uniform(gl, "u_grid_spacing"), static_cast<float>(spacing.x), static_cast<float>(spacing.y),
+                      static_cast<float>(spacing.z));
   gl.ProgramUniform1i(p, uniform(gl, "u_grid_nx"), g.dims[0]);
   gl.ProgramUniform1i(p, uniform(gl, "u_grid_ny"), g.dims[1]);
   gl.ProgramUniform1i(p, uniform(gl, "u_grid_nz"), g.dims[2]);
@@ -305,10 +311,14 @@ GpuConeTracer::GpuConeTracer(const GpuExtinctionPyramid& pyramid, const ConeOpti
   };
   std::vector<Entry> entries(s.size());
   // Level and the level it blends toward; the unfiltered grid sits after the pyramid's levels.
+  // Distances and weights in the pyramid's frame; kappa times its scale, for the levels' extinction
+  // per world unit.
   const int fine = pyramid.host().levels();
+  const LocalFrame& frame = m.pyr().frame;
   for (std::size_t i = 0; i < s.size(); ++i) {
     const bool below = s[i].level == kFineLevel;
-    entries[i] = {{static_cast<float>(s[i].distance), static_cast<float>(s[i].weight), static_cast<float>(s[i].kappa), static_cast<float>(s[i].blend)},
+    entries[i] = {{static_cast<float>(frame.length(s[i].distance)), static_cast<float>(frame.length(s[i].weight)),
+                   static_cast<float>(s[i].kappa * frame.scale), static_cast<float>(s[i].blend)},
                   {below ? fine : s[i].level, s[i].cones, below ? 0 : s[i].level + 1, 0}};
   }
   m.schedule_count = static_cast<int>(s.size());
@@ -339,7 +349,7 @@ std::vector<float> GpuConeTracer::transmittance(const ConeTarget& target, const 
   CurrentContext current(m.dev());
   const GlApi& gl = current.gl();
   m.require_current("GpuConeTracer::transmittance");
-  const std::vector<float> xyz = relative_xyz(points, m.pyr().origin);
+  const std::vector<float> xyz = local_xyz(points, m.pyr().frame);
   m.points.reserve(gl, m.dev(), xyz.size() * sizeof(float), "GpuConeTracer", "query points");
   m.result.reserve(gl, m.dev(), out.size() * sizeof(float), "GpuConeTracer", "results");
   m.grid.reserve(gl, m.dev(), 16, "GpuConeTracer", "grid");  // bound but unread
