@@ -53,7 +53,9 @@ Camera Camera::orbit(const Bounds& bounds, double phi_deg, double theta_deg, dou
   // well defined at the poles, where +z itself would be parallel to the view direction.
   const Vec3d up{-std::sin(theta) * std::cos(phi), -std::sin(theta) * std::sin(phi), std::cos(theta)};
   // The bounding sphere fits when its radius subtends at most half the narrower field of view.
-  const double radius = std::max(0.5 * bounds.diagonal(), 1e-12);
+  // Flat bounds (a single point) get a unit radius: any fixed length would be a world unit.
+  const double diagonal = bounds.diagonal();
+  const double radius = diagonal > 0 ? 0.5 * diagonal : 1.0;
   const double half_y = 0.5 * fov_y_deg * kDegree;
   const double half_x = std::atan(std::tan(half_y) * width / height);
   const double distance = radius / std::sin(std::min(half_x, half_y));

@@ -72,7 +72,8 @@ constexpr double kWgk[8] = {0.022935322010529224963732008058970, 0.0630920926299
 constexpr double kWg[4] = {0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
                            0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
 
-// Adaptive Gauss-Kronrod 7/15 on [x0, x1], accepted when |K15 - G7| <= 1e-10 |K15| + 1e-14 (len).
+// Adaptive Gauss-Kronrod 7/15 on [x0, x1], accepted when |K15 - G7| <= 1e-10 |K15| + 1e-14 (x1 - x0) / len:
+// both terms are colours (no unit), so the test does not depend on the world's length unit.
 void integrate_gk(const Piece& p, double x0, double x1, int depth, double out[3]) {
   const double c = 0.5 * (x0 + x1), h = 0.5 * (x1 - x0);
   double k[3] = {0, 0, 0}, g[3] = {0, 0, 0}, f[3];
@@ -93,7 +94,7 @@ void integrate_gk(const Piece& p, double x0, double x1, int depth, double out[3]
     err = std::max(err, std::fabs(k[ch] - g[ch]));
     mag = std::max(mag, std::fabs(k[ch]));
   }
-  if (err <= 1e-10 * mag + 1e-14 * (x1 - x0) || depth >= 40) {
+  if (err <= 1e-10 * mag + 1e-14 * (x1 - x0) / p.len || depth >= 40) {
     for (int ch = 0; ch < 3; ++ch) out[ch] += k[ch];
     return;
   }

@@ -441,7 +441,9 @@ void walk_batch(const WalkInput& in, WalkJob* jobs, std::size_t count) {
 
 void project_parallel(const TetMesh& mesh, const Vec3d& towards, const std::vector<float>& scalars,
                       std::vector<ParallelPoint>& out) {
-  const detail::RayFrame frame({0, 0, 0}, towards);
+  // Projected about the mesh's centre: walks use differences of these, which then keep the mesh's
+  // own relative precision wherever it sits.
+  const detail::RayFrame frame(mesh.frame.center, towards);
   out.resize(mesh.points.size());
   parallel_for(out.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
     for (std::size_t p = b; p < e; ++p) {
