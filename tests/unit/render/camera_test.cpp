@@ -44,6 +44,24 @@ TEST(Camera, OrbitFollowsCinemaAngles) {
     }
 }
 
+TEST(Camera, OrbitScalesWithTheBounds) {
+  // The same view of a mesh at any size: the eye's distance is a multiple of the diagonal.
+  Bounds unit;
+  unit.extend({-1, -2, 0.5});
+  unit.extend({3, 1, 2});
+  const Camera reference = Camera::orbit(unit, 30, 20, 35, 64, 48);
+  for (double s : {1e-18, 1e-12, 1e6, 1e18}) {
+    Bounds scaled;
+    scaled.extend(unit.lo * s);
+    scaled.extend(unit.hi * s);
+    const Camera c = Camera::orbit(scaled, 30, 20, 35, 64, 48);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(c.eye[a] / s, reference.eye[a], 1e-12 * length(reference.eye)) << s;
+      EXPECT_NEAR(c.target[a] / s, reference.target[a], 1e-12 * length(reference.eye)) << s;
+    }
+  }
+}
+
 TEST(Camera, RejectsBadArguments) {
   EXPECT_THROW(Camera::look_at({0, 0, 0}, {0, 0, 0}, {0, 1, 0}, 30, 8, 8), Error);
   EXPECT_THROW(Camera::look_at({0, 0, 1}, {0, 0, 0}, {0, 0, 1}, 30, 8, 8), Error);
