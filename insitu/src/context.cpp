@@ -11,6 +11,8 @@
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <tuple>
+#include <utility>
 
 #include "field_store.h"
 #include "occlusion_lighting.h"
@@ -84,29 +86,25 @@ std::vector<std::string> field_labels(const Config& c) {
   return labels;
 }
 
-/// Transfer function of `f` in data units and extinction per world unit, for this step's scalars.
-render::TransferFunction resolve_transfer_function(const FieldConfig& f, const std::vector<float>& scalars,
-                                                   double diagonal) {
+/// The data range that field `f` maps to [0, 1] this step: the config's range, else the values'
+/// finite range. A constant (or all-NaN) field has lo == hi: the range is widened symmetrically so
+/// that the value sits at 0.5 instead of dividing by zero (any half-width works; this one is
+/// finite and at least the value's own size).
+std::pair<double, double> normalization_range(const FieldConfig& f, const std::vector<double>& values) {
+  if (f.range) return *f.range;
+  const ValueRange r = finite_range(values);
+  if (r.hi > r.lo) return {r.lo, r.hi};
+  const double h = 0.5 * std::max(1.0, std::fabs(r.lo));
+  return {r.lo - h, r.lo + h};
+}
+
+/// Transfer function of `f` over the step's normalised values (x in [0, 1] over [lo, hi]) with
+/// extinction per world unit.
+render::TransferFunction resolve_transfer_function(const FieldConfig& f, double lo, double hi, double diagonal) {
   render::TransferFunction tf = f.transfer_function;
-  if (f.x_units == XUnits::normalized) {
-    double lo = 0, hi = 1;
-    if (f.range) {
-      lo = f.range->first;
-      hi = f.range->second;
-    } else {
-      const ValueRange r = finite_range(scalars);
-      lo = r.lo;
-      hi = r.hi;
-      // A constant (or all-NaN) field has lo == hi: widen the range symmetrically so the value
-      // sits at x = 0.5 instead of dividing by zero. Any half-width works; this one is finite.
-      if (!(hi > lo)) {
-        const double h = 0.5 * std::max(1.0, std::fabs(lo));
-        lo -= h;
-        hi += h;
-      }
-    }
-    for (auto& c : tf.colors) c.x = lo + c.x * (hi - lo);
-    for (auto& o : tf.opacities) o.x = lo + o.x * (hi - lo);
+  if (f.x_units == XUnits::data) {
+    for (auto& c : tf.colors) c.x = normalize_value(c.x, lo, hi);
+    for (auto& o : tf.opacities) o.x = normalize_value(o.x, lo, hi);
   }
   if (f.opacity_unit == OpacityUnit::diagonal && diagonal > 0)
     for (auto& o : tf.opacities) o.a /= diagonal;
@@ -335,7 +333,7 @@ void Context::StepFailures::rethrow() const {
   if (code != ErrorCode::ok) throw Error(code, text);
 }
 
-const std::vector<float>& Context::field_values(std::size_t index, std::int64_t cycle, StepValues& values) const {
+const Context::StepField& Context::field_values(std::size_t index, std::int64_t cycle, StepValues& values) const {
   auto& v = values[index];
   if (v) return *v;
   const FieldConfig& f = m_config.fields[index];
@@ -344,14 +342,19 @@ const std::vector<float>& Context::field_values(std::size_t index, std::int64_t 
     throw Error(ErrorCode::invalid_operation, "pnb_execute: field '" + f.name + "' was not published for cycle " +
                                                   std::to_string(cycle) + " (call pnb_publish_field before pnb_execute)");
   // A held view stays valid: borrowed views are dropped after every execute, copied ones own their data.
-  return v.emplace(point_scalars(m_mesh->view, it->second.view, f.mode, f.component));
+  StepField& step = v.emplace();
+  step.values = point_values(m_mesh->view, it->second.view, f.mode, f.component);
+  std::tie(step.lo, step.hi) = normalization_range(f, step.values);
+  step.normalized = normalize_values(step.values, step.lo, step.hi);
+  return step;
 }
 
 void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                            std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
   const FieldConfig& f = m_config.fields[index];
-  const std::vector<float>& scalars = field_values(index, cycle, values);
-  const render::TransferFunction tf = resolve_transfer_function(f, scalars, m_mesh->tets->bounds.diagonal());
+  const StepField& step = field_values(index, cycle, values);
+  const std::vector<float>& scalars = step.normalized;
+  const render::TransferFunction tf = resolve_transfer_function(f, step.lo, step.hi, m_mesh->tets->bounds.diagonal());
   render::RenderOptions options;
   if (lit(m_config)) {
     const LightingConfig& l = *m_config.lighting;
@@ -463,7 +466,7 @@ void Context::store_fields(double time, std::int64_t cycle, StepValues& values, 
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     if (m_fields.find(m_config.fields[i].name) == m_fields.end()) continue;  // reported when the step renders
     try {
-      m_store->record(m_field_labels[i], time, cycle, field_values(i, cycle, values));
+      m_store->record(m_field_labels[i], time, cycle, field_values(i, cycle, values).values);
     } catch (const Error& e) {
       failures.add(e);
     }

@@ -93,13 +93,21 @@ private:
     void add(const Error& e);
     void rethrow() const;
   };
-  /// Each config field's point values for this step, converted once for the store and the images.
-  using StepValues = std::vector<std::optional<std::vector<float>>>;
+  /// One config field's point values for this step, converted once for the store and the images:
+  /// in double as published, and mapped from [lo, hi] to [0, 1] in double before narrowing to
+  /// float, which is what the renderers see (the transfer function is mapped alike), so that a
+  /// field of any magnitude and offset keeps its variation.
+  struct StepField {
+    std::vector<double> values;
+    double lo = 0, hi = 1;
+    std::vector<float> normalized;
+  };
+  using StepValues = std::vector<std::optional<StepField>>;
 
   void require_open(const char* call) const;
   /// Point values of config field `index` this step; throws Error(invalid_operation) when the
   /// field was not published.
-  const std::vector<float>& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
+  const StepField& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
   void render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                     std::vector<CinemaDatabase::Row>& rows, double& render_ms);
   void drop_borrowed_fields();

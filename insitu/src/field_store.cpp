@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "penumbra/core/error.h"
 #include "stored_mesh.h"
@@ -21,6 +22,23 @@ std::string file_stem(const std::string& name) {
   for (char& c : s)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
   return s.empty() || s[0] == '.' ? "_" + s : s;
+}
+
+// The values as float32 (NaN stays NaN: the encoder reports it); a finite value beyond float32's
+// range would become infinite, so it is refused here with its point and the limit.
+std::vector<float> to_float32(const std::vector<double>& values, const std::string& who) {
+  std::vector<float> out(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double v = values[i];
+    if (std::isfinite(v) && std::fabs(v) > std::numeric_limits<float>::max()) {
+      char text[160];
+      std::snprintf(text, sizeof text, ": point %zu has the value %.17g, beyond float32's range (|v| <= %.9g) in which the store keeps values",
+                    i, v, static_cast<double>(std::numeric_limits<float>::max()));
+      throw Error(ErrorCode::invalid_argument, who + text);
+    }
+    out[i] = static_cast<float>(v);
+  }
+  return out;
 }
 
 }  // namespace
@@ -64,7 +82,7 @@ void FieldStore::begin_segment(const MeshView& mesh) {
   write_steps();
 }
 
-void FieldStore::record(const std::string& field, double time, std::int64_t cycle, const std::vector<float>& values) {
+void FieldStore::record(const std::string& field, double time, std::int64_t cycle, const std::vector<double>& values) {
   if (m_segment_dir.empty()) throw Error(ErrorCode::invalid_operation, "store: no mesh published yet");
   require(values.size() == m_point_count, "store: field '" + field + "' has " + std::to_string(values.size()) +
                                               " values for " + std::to_string(m_point_count) + " points");
@@ -83,8 +101,9 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
       throw;
     }
   }
+  const std::vector<float> narrowed = to_float32(values, "store: field '" + field + "' at cycle " + std::to_string(cycle));
   try {
-    enc->push(time, values.data());
+    enc->push(time, narrowed.data());
   } catch (const Error& e) {
     throw Error(e.code(), "store: field '" + field + "' at cycle " + std::to_string(cycle) + ": " + e.what());
   }

@@ -32,9 +32,10 @@ public:
   void begin_segment(const MeshView& mesh);
   /// Whether `cycle` is a recorded step (every_cycles).
   bool records(std::int64_t cycle) const;
-  /// Adds one step of `field` (one value per mesh point). Throws Error naming the field and the
-  /// point for NaN/Inf values: that step of that field is then not stored.
-  void record(const std::string& field, double time, std::int64_t cycle, const std::vector<float>& values);
+  /// Adds one step of `field` (one value per mesh point), kept as float32. Throws Error naming the
+  /// field and the point for NaN/Inf values and for values beyond float32's range: that step of
+  /// that field is then not stored.
+  void record(const std::string& field, double time, std::int64_t cycle, const std::vector<double>& values);
   /// Completes every file of the current segment. Idempotent.
   void finish();
 
