@@ -2,7 +2,9 @@
 // core/src/mesh_validation.cpp
 #include "penumbra/core/mesh_validation.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "penumbra/core/error.h"
@@ -28,6 +30,31 @@ std::string cell_name(std::size_t c) { return "cell " + std::to_string(c); }
 
 // Per-item checks call this only on failure, so the message is never built on the hot path.
 [[noreturn]] void fail(const std::string& message) { throw Error(ErrorCode::invalid_argument, message); }
+
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
+// The mesh's size and position against the limits that its coordinates are computed within
+// (kMinMeshExtent, kMaxMeshExtent, kMaxMeshOffset); points are finite here.
+void check_extent(const MeshView& m, const std::string& who) {
+  Bounds b;
+  for (std::size_t i = 0; i < m.point_count(); ++i) b.extend(m.point(i));
+  const double extent = b.diagonal();  // infinite beyond double's range: refused as too large
+  if (!(extent >= kMinMeshExtent && extent <= kMaxMeshExtent))
+    fail(who + "the mesh's extent (bounding-box diagonal) is " + number(extent) + " world units; meshes from " +
+         number(kMinMeshExtent) + " to " + number(kMaxMeshExtent) +
+         " are rendered, the picture being the same at any scale: express the coordinates in another unit");
+  const double reach = std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z), std::fabs(b.hi.x),
+                                 std::fabs(b.hi.y), std::fabs(b.hi.z)});
+  if (reach > kMaxMeshOffset * extent)
+    fail(who + "the mesh lies " + number(reach / extent) + " extents from the origin (a coordinate of " +
+         number(reach) + " for an extent of " + number(extent) + "); at most " + number(kMaxMeshOffset) +
+         " are rendered, where double coordinates still resolve the mesh finer than float32 does: subtract an "
+         "origin near the mesh from its coordinates");
+}
 
 }  // namespace
 
@@ -63,6 +90,7 @@ void validate_mesh(const MeshView& m, const char* call) {
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
       fail(who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
   }
+  check_extent(m, who);
   const std::size_t nc = m.cell_count();
   require(nc > 0, who + "mesh has no cells");
   for (std::size_t c = 0; c < nc; ++c) {

@@ -49,6 +49,40 @@ TEST(MeshValidation, NamesNonFiniteCoordinate) {
   EXPECT_NE(validation_error(m.view()).find("point 5"), std::string::npos);
 }
 
+TEST(MeshValidation, ExtentAndPositionWithinTheLimitsAreAccepted) {
+  for (double size : {1e-80, 1e-15, 1.0, 1e15, 1e80}) {
+    const auto m = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {size, size, size});
+    EXPECT_EQ(validation_error(m.view()), "") << size;
+    const double far = 1e8 * size;  // 1e8 extents away
+    const auto moved = fixtures::block(BlockCells::hexes, 2, 2, 2, {far, 0, -far}, {far + size, size, size - far});
+    EXPECT_EQ(validation_error(moved.view()), "") << size;
+  }
+}
+
+TEST(MeshValidation, ExtentBeyondTheLimitsIsRefusedWithTheLimitAndTheRemedy) {
+  for (double size : {1e-100, 1e100, 1e300}) {
+    const auto m = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {size, size, size});
+    const std::string msg = validation_error(m.view());
+    EXPECT_NE(msg.find("the mesh's extent (bounding-box diagonal) is"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("1e-90 to 1e+90"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("another unit"), std::string::npos) << msg;
+  }
+  // The largest doubles: an extent beyond double's range is refused too.
+  const double big = std::numeric_limits<double>::max();
+  fixtures::OwnedMesh huge;
+  huge.add_cell(10, {huge.add_point(-big, 0, 0), huge.add_point(big, 0, 0), huge.add_point(0, big, 0),
+                     huge.add_point(0, 0, big)});
+  EXPECT_NE(validation_error(huge.view()).find("extent (bounding-box diagonal) is inf"), std::string::npos)
+      << validation_error(huge.view());
+}
+
+TEST(MeshValidation, MeshTooFarFromTheOriginIsRefused) {
+  const auto m = fixtures::block(BlockCells::tets, 2, 2, 2, {3e10, 0, 0}, {3e10 + 1, 1, 1});
+  const std::string msg = validation_error(m.view());
+  EXPECT_NE(msg.find("extents from the origin"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("at most 1e+09"), std::string::npos) << msg;
+}
+
 TEST(MeshValidation, NamesZeroVolumeCell) {
   fixtures::OwnedMesh m;
   for (double x : {0.0, 1.0})
