@@ -236,6 +236,14 @@ void Context::publish_mesh(const MeshView& mesh) {
   }
   auto p = std::make_unique<PreparedMesh>();
   p->tets = std::make_shared<const render::TetMesh>(render::prepare_tet_mesh(mesh, "pnb_publish_mesh"));
+  if (p->tets->tangled()) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "pnb_publish_mesh: the mesh is tangled: its cells' volume (%.6g) differs from the volume its boundary "
+                  "encloses (%.6g), so cells overlap and pictures through the overlaps are undefined",
+                  p->tets->tet_volume, p->tets->enclosed_volume);
+    log_line(text);
+  }
   if (m_config.backend == Backend::gpu) {
     try {
       p->gpu_caster = std::make_unique<render::GpuRayCaster>(process_gpu_device(false), p->tets);

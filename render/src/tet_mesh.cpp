@@ -2,6 +2,7 @@
 // render/src/tet_mesh.cpp -- from a solver's MeshView to a render-ready TetMesh
 #include "penumbra/render/tet_mesh.h"
 
+#include <cmath>
 #include <algorithm>
 #include <cstring>
 #include <limits>
@@ -148,7 +149,32 @@ std::shared_ptr<const BoundarySurface> make_surface(const TetMesh& m, const std:
   return std::make_shared<const BoundarySurface>(m.points, tris);
 }
 
+// The tets' volume, and the volume the boundary encloses: each outward boundary face with the
+// centre as apex, summed (divergence theorem). Relative to the centre, so that a mesh far from the
+// origin keeps its precision.
+void measure_volumes(TetMesh& m) {
+  const Vec3d c = m.frame.center;
+  double tets = 0, enclosed = 0;
+  for (const auto& t : m.tets)
+    tets += signed_volume6(m.points[static_cast<std::size_t>(t[0])] - c, m.points[static_cast<std::size_t>(t[1])] - c,
+                           m.points[static_cast<std::size_t>(t[2])] - c, m.points[static_cast<std::size_t>(t[3])] - c);
+  for (const BoundaryFace& f : m.boundary) {
+    const auto& t = m.tets[static_cast<std::size_t>(f.tet)];
+    Vec3d q[4];
+    for (int k = 0; k < 4; ++k) q[k] = m.points[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])] - c;
+    q[f.face] = Vec3d{0, 0, 0};  // the face's tet with its apex moved to the centre
+    enclosed += signed_volume6(q[0], q[1], q[2], q[3]);
+  }
+  m.tet_volume = tets / 6;
+  m.enclosed_volume = enclosed / 6;
+}
+
 }  // namespace
+
+bool TetMesh::tangled() const {
+  // Rounding of the two sums stays below 1e-12 of the volume on meshes of millions of tets.
+  return std::fabs(tet_volume - enclosed_volume) > 1e-9 * std::fabs(tet_volume);
+}
 
 TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
   validate_mesh(view, call);
@@ -169,6 +195,7 @@ TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
   m.reoriented_tets = orient_tets(m, view);
   build_adjacency(m, canon);
   m.surface = make_surface(m, canon);
+  measure_volumes(m);
   return m;
 }
 

@@ -136,4 +136,24 @@ inline void expect_invariant(const std::string& name, const Renderer& render, co
   }
 }
 
+/// The light volume of the scene's lights solved to convergence (on the CPU, or on the GPU
+/// device), then the frame ray cast with its light field by the caster of the same backend.
+inline Renderer light_volume(bool gpu, render::LightSolveMode mode, double scattering) {
+  return [=](const std::shared_ptr<const render::TetMesh>& mesh, const Scene& s) {
+    render::LightVolumeOptions o;
+    o.level0_resolution = 24;
+    o.mode = mode;
+    o.sigma_s = {scattering, 0.5 * scattering, 0.25 * scattering};
+    if (gpu) o.device = device();
+    render::LightVolume volume(mesh, o);
+    volume.set_lights(s.lights);
+    volume.set_field(s.scalars, s.tf);
+    EXPECT_TRUE(volume.update().converged);
+    Scene lit = s;
+    lit.options.shading.model = render::LightingModel::light_volume;
+    lit.options.shading.light_rgb = &volume.light_rgb();
+    return gpu ? render_gpu(mesh, lit) : render_cpu(mesh, lit);
+  };
+}
+
 }  // namespace penumbra::test

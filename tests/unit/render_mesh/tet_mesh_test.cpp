@@ -78,6 +78,25 @@ TEST(TetMesh, InvertedTetsAreReoriented) {
   expect_conforming(m, 12 * 4, 1.0);
 }
 
+TEST(TetMesh, AFoldedMeshIsTangledAndABlockIsNot) {
+  for (auto kind : {fixtures::BlockCells::tets, fixtures::BlockCells::hexes, fixtures::BlockCells::wedges,
+                    fixtures::BlockCells::pyramids}) {
+    const auto block = render::prepare_tet_mesh(fixtures::block(kind, 3, 2, 2, {5, 0, 0}, {6, 2, 1}).view());
+    EXPECT_NEAR(block.tet_volume, 2.0, 1e-12);
+    EXPECT_NEAR(block.enclosed_volume, 2.0, 1e-12);
+    EXPECT_FALSE(block.tangled());
+  }
+  // Two tets on the same side of the face they share: the second folds back over the first.
+  fixtures::OwnedMesh folded;
+  const auto a = folded.add_point(0, 0, 0), b = folded.add_point(1, 0, 0), c = folded.add_point(0, 1, 0);
+  const auto top = folded.add_point(0.2, 0.2, 1), fold = folded.add_point(0.3, 0.3, 0.5);
+  folded.add_cell(10, {a, b, c, top});
+  folded.add_cell(10, {a, c, b, fold});  // inverted as given: reoriented, and then on top's side
+  const auto m = render::prepare_tet_mesh(folded.view());
+  EXPECT_EQ(m.reoriented_tets, 1u);
+  EXPECT_TRUE(m.tangled()) << m.tet_volume << " vs " << m.enclosed_volume;
+}
+
 TEST(TetMesh, DuplicatedInterfacePointsAreWelded) {
   // Two hex blocks side by side, each with its own copy of the shared x = 1 plane of points.
   auto left = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {1, 1, 1});

@@ -37,6 +37,12 @@ struct TetMesh {
   LocalFrame frame;                  ///< where float32 copies of the mesh live (the GPU paths)
   std::size_t welded_points = 0;     ///< duplicate points merged for adjacency
   std::size_t reoriented_tets = 0;   ///< input tets whose orientation was flipped
+  /// The tets' total volume and the volume the boundary faces enclose (divergence theorem). They
+  /// agree to rounding for a valid tessellation; where they differ, the mesh is tangled (cells
+  /// folded over or through each other, e.g. a crushed shell) and pictures through its overlaps
+  /// are undefined. (Agreement does not prove a mesh untangled: separate overlapping parts agree.)
+  double tet_volume = 0, enclosed_volume = 0;
+  bool tangled() const;
   std::uint64_t topology_version = 0;
   std::shared_ptr<const BoundarySurface> surface;  ///< OpenMesh boundary surface (entry/exit, geometry)
 
