@@ -2,6 +2,7 @@
 // insitu/src/field_store.cpp -- segments, per-field streaming encoders and the step list
 #include "field_store.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -39,6 +40,38 @@ std::vector<float> to_float32(const std::vector<double>& values, const std::stri
     out[i] = static_cast<float>(v);
   }
   return out;
+}
+
+// The store keeps float32 values: a field whose values are far larger than their variation (an
+// absolute temperature, a pressure with a large ambient part) loses that variation in the
+// narrowing. Refused when the narrowing alone moves a value by more than the configured error
+// bound, or, without a bound, by more than 1e-4 of the step's range (a tenth of what the VQ codec
+// itself costs on smooth fields), instead of storing a history that replays wrong.
+void check_narrowing(const std::vector<double>& values, const std::vector<float>& narrowed,
+                     const compression::ErrorBound& bound, const std::string& who) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, worst = 0, at = 0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) continue;
+    lo = std::min(lo, values[i]);
+    hi = std::max(hi, values[i]);
+    const double e = std::fabs(values[i] - static_cast<double>(narrowed[i]));
+    if (e > worst) {
+      worst = e;
+      at = values[i];
+    }
+  }
+  const double range = hi - lo;
+  if (!(range > 0)) return;  // constant: float32 holds its one value as well as it can
+  const double allowed = bound.kind == compression::BoundKind::absolute         ? bound.value
+                         : bound.kind == compression::BoundKind::range_relative ? bound.value * range
+                                                                                : 1e-4 * range;
+  if (worst <= allowed) return;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                ": float32, in which the store keeps values, moves them by up to %.3g (at %.9g) while they vary by %.3g, "
+                "beyond the %.3g the store may lose (%s); store the field minus a reference value, or render it in situ only",
+                worst, at, range, allowed, bound.kind == compression::BoundKind::none ? "1e-4 of the range without an error bound" : "its error bound");
+  throw Error(ErrorCode::invalid_argument, who + text);
 }
 
 }  // namespace
@@ -101,7 +134,9 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
       throw;
     }
   }
-  const std::vector<float> narrowed = to_float32(values, "store: field '" + field + "' at cycle " + std::to_string(cycle));
+  const std::string who = "store: field '" + field + "' at cycle " + std::to_string(cycle);
+  const std::vector<float> narrowed = to_float32(values, who);
+  check_narrowing(values, narrowed, m_config.codec.bound, who);
   try {
     enc->push(time, narrowed.data());
   } catch (const Error& e) {

@@ -131,5 +131,33 @@ TEST(FieldValues, TheStoreRefusesValuesBeyondFloat32AndTheImagesAreStillWritten)
   EXPECT_EQ(rows.size(), 3u);  // header and the two cameras' images
 }
 
+// A field whose offset dwarfs its variation loses the variation in float32, which the store keeps:
+// refused beyond the error bound (here 1e-3 of the range), stored within it.
+TEST(FieldValues, TheStoreRefusesAFieldThatFloat32CannotHoldWithinItsBound) {
+  TempDir tmp;
+  const std::vector<double> v = base_field();
+  for (const double offset : {1e2, 1e9}) {
+    std::vector<double> t(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) t[i] = v[i] + 2 * offset;  // range about 2
+    const std::string dir = tmp / std::to_string(static_cast<long long>(offset));
+    Context ctx(parse_config(testing::small_config(dir + "/db", R"([{"name": "T"}])",
+                                                   R"(, "store": {"directory": ")" + dir + R"(/store", "error_bound": {"relative": 0.001}})")));
+    ctx.publish_mesh(mesh().view());
+    ctx.publish_field(fixtures::point_field("T", t), false);
+    if (offset < 1e3) {
+      EXPECT_TRUE(ctx.execute(0.0, 1));  // float32 resolves 2e2 to 1.5e-5: within 2e-3
+      continue;
+    }
+    try {
+      ctx.execute(0.0, 1);
+      ADD_FAILURE() << "expected the store to refuse the field";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+      EXPECT_NE(std::string(e.what()).find("float32, in which the store keeps values, moves them by up to"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace penumbra::insitu
