@@ -21,6 +21,7 @@
 
 #include "bench_util.h"
 #include "occlusion_lighting.h"
+#include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/gpu_ray_caster.h"
