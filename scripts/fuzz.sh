@@ -2,9 +2,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # scripts/fuzz.sh [SECONDS] -- builds the parsers' libFuzzer harnesses (tests/fuzz, described in
 # tests/README.md) with clang, AddressSanitizer and UndefinedBehaviorSanitizer in build-fuzz, then
-# runs each for SECONDS (default 60) on a copy of its seeds and regression inputs, in a temporary
-# folder (nothing is written into the repository; inputs that crash are kept in
-# build-fuzz/artifacts/). Leak detection is on. Prints one line per harness (executions, and the
+# runs each for SECONDS (default 60; as many at once as there are cores) on a copy of its seeds and
+# regression inputs, in a temporary folder (nothing is written into the repository; inputs that
+# crash are kept in build-fuzz/artifacts/). Leak detection is on. Prints one line per harness (executions, and the
 # cov/ft that libFuzzer reached) and exits 1 when any harness crashed, leaked, hung (-timeout=10),
 # ran out of memory (-rss_limit_mb=2048) or hit undefined behaviour.
 # Needs what scripts/setup.sh installs, and clang 14 or later with its libFuzzer runtime.
@@ -42,39 +42,52 @@ mkdir -p "$build/artifacts"
 export TMPDIR="$work"  # the harnesses' own temporary files
 export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:allocator_may_return_null=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-failed=()
-summary=()
-for h in "${harnesses[@]}"; do
-  corpus="$work/corpus-$h"
+# One harness: its run, then its summary line in $work/$h.line (FAILED and the first lines of the
+# report on stderr when it failed).
+run_harness() {
+  local h=$1 corpus="$work/corpus-$h" log="$work/$h.log" rc=0
   mkdir -p "$corpus"
   cp tests/fuzz/seeds/"$h"/* "$corpus"/
   if [ -d tests/fuzz/regressions/"$h" ] && [ -n "$(ls -A tests/fuzz/regressions/"$h")" ]; then
     cp tests/fuzz/regressions/"$h"/* "$corpus"/
   fi
+  local seeds
   seeds=$(ls "$corpus" | wc -l)
-  args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$h]}" -print_final_stats=1
-        -detect_leaks=1 -artifact_prefix="$build/artifacts/$h-")
+  local args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="${max_len[$h]}" -print_final_stats=1
+              -detect_leaks=1 -artifact_prefix="$build/artifacts/$h-")
   if [ -n "${dict[$h]:-}" ]; then args+=(-dict="${dict[$h]}"); fi
-  log="$work/$h.log"
-  echo "fuzz.sh: $h for $seconds s ..."
-  rc=0
   "$build/tests/fuzz/pnb_fuzz_$h" "${args[@]}" "$corpus" >"$log" 2>&1 || rc=$?
+  local execs last cov ft line
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
   last=$(grep -E '^#[0-9]+.* cov: ' "$log" | tail -n 1 || true)
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
-  corpus_after=$(ls "$corpus" | wc -l)
   line=$(printf '%-13s %10s executions  cov: %-6s ft: %-6s corpus %s -> %s' "$h" "${execs:-?}" "${cov:-?}" "${ft:-?}" \
-         "$seeds" "$corpus_after")
+         "$seeds" "$(ls "$corpus" | wc -l)")
   if [ "$rc" -ne 0 ] || grep -qE 'runtime error:|ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer)' "$log"; then
     line="$line  FAILED (exit $rc; inputs in $build/artifacts/)"
-    failed+=("$h")
     grep -E 'runtime error:|ERROR:|SUMMARY:|Test unit written|^    #[0-9]+ ' "$log" | head -n 40 >&2 || true
   fi
-  echo "$line"
+  echo "$line" >"$work/$h.line"
+}
+
+# As many harnesses at once as there are cores: each is one process on one core, so a harness
+# gets as many executions in its SECONDS as it would alone.
+parallel=$(nproc)
+for h in "${harnesses[@]}"; do
+  echo "fuzz.sh: $h for $seconds s ..."
+  run_harness "$h" &
+  while [ "$(jobs -rp | wc -l)" -ge "$parallel" ]; do wait -n || true; done
+done
+wait
+failed=()
+summary=()
+for h in "${harnesses[@]}"; do
+  line=$(cat "$work/$h.line" 2>/dev/null || echo "$h  FAILED (no result)")
+  [[ "$line" == *FAILED* ]] && failed+=("$h")
   summary+=("$line")
 done
-echo "fuzz.sh: runs took $(($(date +%s) - built)) s ($seconds s per harness)"
+echo "fuzz.sh: runs took $(($(date +%s) - built)) s ($seconds s per harness, $parallel at once)"
 printf '%s\n' "${summary[@]}"
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz.sh: FAILED: ${failed[*]}" >&2
