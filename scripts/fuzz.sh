@@ -71,8 +71,8 @@ run_harness() {
   echo "$line" >"$work/$h.line"
 }
 
-# As many harnesses at once as there are cores: each is one process on one core, so a harness
-# gets as many executions in its SECONDS as it would alone.
+# As many harnesses at once as there are cores: a libFuzzer run is one process on one core (only
+# field_file's page decodes use the thread pool), so the run takes a fraction of the time.
 parallel=$(nproc)
 for h in "${harnesses[@]}"; do
   echo "fuzz.sh: $h for $seconds s ..."
