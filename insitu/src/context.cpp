@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <tuple>
@@ -87,15 +88,15 @@ std::vector<std::string> field_labels(const Config& c) {
 }
 
 /// The data range that field `f` maps to [0, 1] this step: the config's range, else the values'
-/// finite range. A constant (or all-NaN) field has lo == hi: the range is widened symmetrically so
-/// that the value sits at 0.5 instead of dividing by zero (any half-width works; this one is
-/// finite and at least the value's own size).
+/// finite range. A constant (or all-NaN) field has lo == hi: the range is widened around the value
+/// so that it sits inside instead of dividing by zero (any half-width works; this one is at least
+/// the value's own size, and an end beyond the largest double is held at it).
 std::pair<double, double> normalization_range(const FieldConfig& f, const std::vector<double>& values) {
   if (f.range) return *f.range;
   const ValueRange r = finite_range(values);
   if (r.hi > r.lo) return {r.lo, r.hi};
-  const double h = 0.5 * std::max(1.0, std::fabs(r.lo));
-  return {r.lo - h, r.lo + h};
+  const double h = 0.5 * std::max(1.0, std::fabs(r.lo)), largest = std::numeric_limits<double>::max();
+  return {std::max(r.lo - h, -largest), std::min(r.lo + h, largest)};
 }
 
 /// Transfer function of `f` over the step's normalised values (x in [0, 1] over [lo, hi]) with

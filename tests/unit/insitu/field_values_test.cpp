@@ -109,6 +109,25 @@ TEST(FieldValues, OcclusionSeesTheNormalisedField) {
   expect_same_images("cpu", "occlusion", R"({"model": "occlusion", "occlusion": {"grid": 24, "volume_resolution": 12}})");
 }
 
+// A constant field sits at the middle of its widened range, whatever its value, up to the largest
+// doubles (where the widened range is held at them): never a blank image.
+TEST(FieldValues, AConstantFieldOfAnyMagnitudeShowsAsAConstant) {
+  TempDir tmp;
+  const std::string tf = "{" + colours_and_opacities(0, 1) + "}";
+  const auto middle = render_step(tmp / "one", std::vector<double>(base_field().size(), 1.0), "cpu", R"({"model": "none"})", tf);
+  long sum = 0;
+  for (unsigned char c : middle) sum += c;
+  ASSERT_GT(sum, 0) << "the constant field must show";
+  int index = 0;
+  for (double c : {0.0, 1e-300, -1e300, 1.7e308, -1.7e308}) {
+    const auto image = render_step(tmp / std::to_string(index++), std::vector<double>(base_field().size(), c), "cpu",
+                                   R"({"model": "none"})", tf);
+    long s = 0;
+    for (unsigned char v : image) s += v;
+    EXPECT_GT(s, sum / 4) << c;  // shown, not blank (the value sits at 0.5 or, near the limit, beside it)
+  }
+}
+
 // The store keeps float32 values: a field beyond float32's range is refused there with the point
 // and the limit, while the step's images (rendered from the double values) are still written.
 TEST(FieldValues, TheStoreRefusesValuesBeyondFloat32AndTheImagesAreStillWritten) {
