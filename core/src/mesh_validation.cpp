@@ -37,11 +37,9 @@ std::string number(double v) {
   return text;
 }
 
-// The mesh's size and position against the limits that its coordinates are computed within
-// (kMinMeshExtent, kMaxMeshExtent, kMaxMeshOffset); points are finite here.
-void check_extent(const MeshView& m, const std::string& who) {
-  Bounds b;
-  for (std::size_t i = 0; i < m.point_count(); ++i) b.extend(m.point(i));
+// The mesh's size and position, from the bounds of its (finite) points, against the limits that its
+// coordinates are computed within (kMinMeshExtent, kMaxMeshExtent, kMaxMeshOffset).
+void check_extent(const Bounds& b, const std::string& who) {
   const double extent = b.diagonal();  // infinite beyond double's range: refused as too large
   if (!(extent >= kMinMeshExtent && extent <= kMaxMeshExtent))
     fail(who + "the mesh's extent (bounding-box diagonal) is " + number(extent) + " world units; meshes from " +
@@ -85,12 +83,14 @@ void validate_mesh(const MeshView& m, const char* call) {
                 std::to_string(m.offsets.count - 1) + " cells");
   }
   const std::size_t np = m.point_count();
+  Bounds bounds;
   for (std::size_t i = 0; i < np; ++i) {
     const Vec3d p = m.point(i);
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
       fail(who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
+    bounds.extend(p);
   }
-  check_extent(m, who);
+  check_extent(bounds, who);
   const std::size_t nc = m.cell_count();
   require(nc > 0, who + "mesh has no cells");
   for (std::size_t c = 0; c < nc; ++c) {
