@@ -19,6 +19,8 @@ struct LocalFrame {
   Vec3d center{0, 0, 0};
   double scale = 1;  ///< a power of two: world length of one local unit
 
+  bool operator==(const LocalFrame&) const = default;
+
   /// The frame around `bounds`: its centre, and the smallest power of two at least its diagonal
   /// (1 for empty or single-point bounds), so local coordinates lie within [-0.5, 0.5].
   static LocalFrame of(const Bounds& bounds) {

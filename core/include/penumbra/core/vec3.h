@@ -11,6 +11,7 @@ struct Vec3 {
   T x{}, y{}, z{};
   constexpr T& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
   constexpr T operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  constexpr bool operator==(const Vec3&) const = default;
 };
 template <class T> constexpr Vec3<T> operator+(Vec3<T> a, Vec3<T> b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 template <class T> constexpr Vec3<T> operator-(Vec3<T> a, Vec3<T> b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }

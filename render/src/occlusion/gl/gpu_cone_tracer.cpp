@@ -124,9 +124,7 @@ void GpuExtinctionPyramid::Impl::upload(const ExtinctionPyramid& pyramid) {
 }
 
 void GpuExtinctionPyramid::Impl::hold_mesh(const GlApi& gl, const std::shared_ptr<const TetMesh>& mesh) {
-  const bool same_frame = mesh_frame.center.x == frame.center.x && mesh_frame.center.y == frame.center.y &&
-                          mesh_frame.center.z == frame.center.z && mesh_frame.scale == frame.scale;
-  if (mesh_held == mesh && same_frame) return;
+  if (mesh_held == mesh && mesh_frame == frame) return;
   const std::vector<float> xyz = local_xyz(mesh->points, frame);
   mesh_held.reset();
   mesh_points.reserve(gl, dev(), xyz.size() * sizeof(float), "GpuExtinctionPyramid", "mesh points");
