@@ -71,7 +71,7 @@ inline Scene transformed(const Scene& s, double scale, const Vec3d& shift) {
   t.camera.target = s.camera.target * scale + shift;
   for (auto& o : t.tf.opacities) o.a /= scale;
   for (auto& l : t.lights)
-    if (l.kind == render::Light::Kind::point) l.vector = s.lights[static_cast<std::size_t>(&l - t.lights.data())].vector * scale + shift;
+    if (l.kind == render::Light::Kind::point) l.vector = l.vector * scale + shift;
   return t;
 }
 
