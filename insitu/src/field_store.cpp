@@ -25,10 +25,18 @@ std::string file_stem(const std::string& name) {
   return s.empty() || s[0] == '.' ? "_" + s : s;
 }
 
-// The values as float32 (NaN stays NaN: the encoder reports it); a finite value beyond float32's
-// range would become infinite, so it is refused here with its point and the limit.
-std::vector<float> to_float32(const std::vector<double>& values, const std::string& who) {
+// The values as float32, in which the store keeps them (NaN stays NaN: the encoder reports it).
+// Refused instead, in one pass over the values:
+// - a finite value beyond float32's range, which would become infinite (named with its point);
+// - a field whose values are far larger than their variation (an absolute temperature, a pressure
+//   with a large ambient part) and so lose that variation in the narrowing: when the narrowing
+//   alone moves a value by more than the configured error bound, or, without a bound, by more than
+//   1e-4 of the step's range (a tenth of what the VQ codec itself costs on smooth fields), instead
+//   of storing a history that replays wrong.
+std::vector<float> narrow_for_store(const std::vector<double>& values, const compression::ErrorBound& bound,
+                                    const std::string& who) {
   std::vector<float> out(values.size());
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, worst = 0, at = 0;
   for (std::size_t i = 0; i < values.size(); ++i) {
     const double v = values[i];
     if (std::isfinite(v) && std::fabs(v) > std::numeric_limits<float>::max()) {
@@ -38,34 +46,21 @@ std::vector<float> to_float32(const std::vector<double>& values, const std::stri
       throw Error(ErrorCode::invalid_argument, who + text);
     }
     out[i] = static_cast<float>(v);
-  }
-  return out;
-}
-
-// The store keeps float32 values: a field whose values are far larger than their variation (an
-// absolute temperature, a pressure with a large ambient part) loses that variation in the
-// narrowing. Refused when the narrowing alone moves a value by more than the configured error
-// bound, or, without a bound, by more than 1e-4 of the step's range (a tenth of what the VQ codec
-// itself costs on smooth fields), instead of storing a history that replays wrong.
-void check_narrowing(const std::vector<double>& values, const std::vector<float>& narrowed,
-                     const compression::ErrorBound& bound, const std::string& who) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo, worst = 0, at = 0;
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i])) continue;
-    lo = std::min(lo, values[i]);
-    hi = std::max(hi, values[i]);
-    const double e = std::fabs(values[i] - static_cast<double>(narrowed[i]));
+    if (!std::isfinite(v)) continue;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    const double e = std::fabs(v - static_cast<double>(out[i]));
     if (e > worst) {
       worst = e;
-      at = values[i];
+      at = v;
     }
   }
   const double range = hi - lo;
-  if (!(range > 0)) return;  // constant: float32 holds its one value as well as it can
+  if (!(range > 0)) return out;  // constant: float32 holds its one value as well as it can
   const double allowed = bound.kind == compression::BoundKind::absolute         ? bound.value
                          : bound.kind == compression::BoundKind::range_relative ? bound.value * range
                                                                                 : 1e-4 * range;
-  if (worst <= allowed) return;
+  if (worst <= allowed) return out;
   char text[400];
   std::snprintf(text, sizeof text,
                 ": float32, in which the store keeps values, moves them by up to %.3g (at %.9g) while they vary by %.3g, "
@@ -135,8 +130,7 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
     }
   }
   const std::string who = "store: field '" + field + "' at cycle " + std::to_string(cycle);
-  const std::vector<float> narrowed = to_float32(values, who);
-  check_narrowing(values, narrowed, m_config.codec.bound, who);
+  const std::vector<float> narrowed = narrow_for_store(values, m_config.codec.bound, who);
   try {
     enc->push(time, narrowed.data());
   } catch (const Error& e) {
