@@ -83,11 +83,12 @@ Inputs transformed(const pb::Scene& scene, const Transform& t, int width, int he
   const penumbra::ValueRange r = penumbra::finite_range(values);
   in.scalars = penumbra::normalize_values(values, r.lo, r.hi);
   in.tf = pb::transfer_function(scene);
-  for (auto& c : in.tf.colors) c.x = penumbra::normalize_value(t.field_scale * (c.x + t.field_offset * range), r.lo, r.hi);
+  for (auto& c : in.tf.colors) c.x = t.field_scale * (c.x + t.field_offset * range);
   for (auto& o : in.tf.opacities) {
-    o.x = penumbra::normalize_value(t.field_scale * (o.x + t.field_offset * range), r.lo, r.hi);
+    o.x = t.field_scale * (o.x + t.field_offset * range);
     o.a /= t.scale;
   }
+  in.tf.normalize_x(r.lo, r.hi);
   pr::Light key;  // directional
   key.vector = {-0.4, 0.5, -0.8};
   pr::Light lamp;  // a point light beside the mesh

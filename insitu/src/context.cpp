@@ -103,10 +103,7 @@ std::pair<double, double> normalization_range(const FieldConfig& f, const std::v
 /// extinction per world unit.
 render::TransferFunction resolve_transfer_function(const FieldConfig& f, double lo, double hi, double diagonal) {
   render::TransferFunction tf = f.transfer_function;
-  if (f.x_units == XUnits::data) {
-    for (auto& c : tf.colors) c.x = normalize_value(c.x, lo, hi);
-    for (auto& o : tf.opacities) o.x = normalize_value(o.x, lo, hi);
-  }
+  if (f.x_units == XUnits::data) tf.normalize_x(lo, hi);
   if (f.opacity_unit == OpacityUnit::diagonal && diagonal > 0)
     for (auto& o : tf.opacities) o.a /= diagonal;
   return tf;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "penumbra/core/error.h"
+#include "penumbra/core/field_view.h"
 
 namespace penumbra::render {
 namespace {
@@ -42,6 +43,11 @@ std::vector<double> TransferFunction::breakpoints() const {
   std::sort(x.begin(), x.end());
   x.erase(std::unique(x.begin(), x.end()), x.end());
   return x;
+}
+
+void TransferFunction::normalize_x(double lo, double hi) {
+  for (auto& c : colors) c.x = normalize_value(c.x, lo, hi);
+  for (auto& o : opacities) o.x = normalize_value(o.x, lo, hi);
 }
 
 void TransferFunction::validate() const {

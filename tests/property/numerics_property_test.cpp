@@ -124,8 +124,7 @@ test::Scene normalised(const RandomScene& s, const std::vector<double>& values, 
   const ValueRange r = finite_range(values);
   out.scalars = normalize_values(values, r.lo, r.hi);
   out.tf = tf;
-  for (auto& c : out.tf.colors) c.x = normalize_value(c.x, r.lo, r.hi);
-  for (auto& o : out.tf.opacities) o.x = normalize_value(o.x, r.lo, r.hi);
+  out.tf.normalize_x(r.lo, r.hi);
   out.camera = s.camera;
   out.lights = s.lights;
   return out;

@@ -28,6 +28,9 @@ struct TransferFunction {
   std::vector<double> breakpoints() const;
   /// Throws penumbra::Error(invalid_argument) if empty, unsorted, non-finite or negative.
   void validate() const;
+  /// Moves every control point's x from data units to the normalised units of a field mapped
+  /// from [lo, hi] to [0, 1] (normalize_value, in double), as renderers see such a field.
+  void normalize_x(double lo, double hi);
 };
 
 }  // namespace penumbra::render
