@@ -82,7 +82,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
     pnb_destroy(ctx);
     return 1;
   }
-  std::vector<std::vector<float>> values(run->fields().size());
+  std::vector<std::vector<double>> values(run->fields().size());
   for (std::size_t s = first; s < last; ++s) {
     for (std::size_t f = 0; f < run->fields().size(); ++f) {
       const std::string& name = run->fields()[f];
@@ -98,7 +98,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
       field.values = values[f].data();
       field.count = static_cast<std::int64_t>(values[f].size());
       field.components = 1;
-      field.type = PNB_FLOAT32;
+      field.type = PNB_FLOAT64;
       if (pnb_publish_field(ctx, &field, PNB_BORROW) != PNB_OK)
         fail("step " + std::to_string(s) + ": publish field '" + name + "': " + pnb_last_error(ctx));
     }

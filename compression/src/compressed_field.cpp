@@ -113,8 +113,9 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       if (ir.get<std::uint32_t>() != detail::kIndexMagic) ir.fail("bad index magic");
       const auto pages = ir.get<std::uint32_t>();
       const auto steps = ir.get<std::uint64_t>();
-      f->m_min = ir.get<float>();
-      f->m_max = ir.get<float>();
+      const bool mapped = f->m_version >= detail::kFirstMappedVersion;
+      f->m_min = mapped ? ir.get<double>() : ir.get<float>();
+      f->m_max = mapped ? ir.get<double>() : ir.get<float>();
       ir.get_array(f->m_times, steps);
       std::uint64_t expect_offset = header_bytes, expect_step = 0;
       for (std::uint32_t i = 0; i < pages; ++i) {
@@ -130,9 +131,14 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         ir.get<std::uint32_t>();
         const bool coded = f->m_version >= detail::kFirstCodedVersion;
         if (coded) e.payload_bytes = ir.get<std::uint64_t>();
+        if (mapped) {
+          e.map.offset = ir.get<double>();
+          e.map.scale = ir.get<double>();
+        }
         const std::uint64_t min_bytes = detail::PageHeader::kBytes + (coded ? detail::kCodingPrefixBytes : 0);
         if (e.offset != expect_offset || e.first_step != expect_step || e.step_count < 1 ||
-            e.step_count > info.window || e.bytes < min_bytes || std::uint32_t(e.method) > f->max_method())
+            e.step_count > info.window || e.bytes < min_bytes || std::uint32_t(e.method) > f->max_method() ||
+            !e.map.valid())
           ir.fail("entry of " + page_name(i) + " is inconsistent");
         if (!coded) e.payload_bytes = e.bytes - detail::PageHeader::kBytes;
         expect_offset += e.bytes;
@@ -186,7 +192,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       break;
     }
     PageEntry e{pos, detail::PageHeader::kBytes + h.payload_bytes, h.first_step, h.step_count,
-                PageMethod(h.method), h.value_min, h.value_max, h.bound, h.payload_bytes};
+                PageMethod(h.method), h.value_min, h.value_max, h.bound, h.payload_bytes, ValueMap{}};
     if (options.recover_incomplete) {
       if (f->m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
         std::uint8_t prefix[detail::kCodingPrefixBytes];
@@ -195,12 +201,17 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       }
       try {
         f->m_pages.push_back(e);
+        f->m_maps_from_pages = true;  // no index holds this page's map: it is taken from the page
         const auto page = f->load_page(i);
+        f->m_maps_from_pages = false;
+        f->m_pages.back().map = page->map;
         f->m_times.insert(f->m_times.end(), page->times.begin(), page->times.end());
-        if (i == 0) f->m_min = page->value_min, f->m_max = page->value_max;
-        f->m_min = std::min(f->m_min, page->value_min);
-        f->m_max = std::max(f->m_max, page->value_max);
+        const double lo = page->map.value(page->value_min), hi = page->map.value(page->value_max);
+        if (i == 0) f->m_min = lo, f->m_max = hi;
+        f->m_min = std::min(f->m_min, lo);
+        f->m_max = std::max(f->m_max, hi);
       } catch (const Error& err) {
+        f->m_maps_from_pages = false;
         f->m_pages.pop_back();
         problem = err.what();
         break;
@@ -268,6 +279,10 @@ std::shared_ptr<const EncodedPage> CompressedField::load_page(std::size_t index,
     buffers.spare = std::move(page);  // its memory still serves the next load
     throw;
   }
+  if (m_version >= detail::kFirstMappedVersion && !m_maps_from_pages && !(page->map == e.map)) {
+    buffers.spare = std::move(page);
+    throw Error(ErrorCode::io_error, name + ": value map does not match the index");
+  }
   return page;
 }
 
@@ -275,7 +290,17 @@ std::uint32_t CompressedField::max_method() const { return detail::max_method_of
 
 void CompressedField::read_step(std::uint64_t step, float* out) const {
   const std::size_t p = page_of_step(step);
-  decode_step(*load_page(p), std::uint32_t(step - m_pages[p].first_step), out);
+  const auto page = load_page(p);
+  decode_step(*page, std::uint32_t(step - m_pages[p].first_step), out);
+  narrow_through_map(page->map, out, m_info.vertex_count);
+}
+
+void CompressedField::read_step(std::uint64_t step, double* out) const {
+  const std::size_t p = page_of_step(step);
+  const auto page = load_page(p);
+  std::vector<float> stored(m_info.vertex_count);
+  decode_step(*page, std::uint32_t(step - m_pages[p].first_step), stored.data());
+  apply_map(page->map, stored.data(), stored.size(), out);
 }
 
 void CompressedField::verify() const {

@@ -40,14 +40,20 @@ std::vector<std::uint8_t> serialize_header(const FieldInfo& info) {
 }
 
 std::vector<std::uint8_t> serialize_index(const std::vector<PageEntry>& pages, const std::vector<double>& times,
-                                          float value_min, float value_max, std::uint32_t format_version) {
+                                          double value_min, double value_max, std::uint32_t format_version) {
   std::vector<std::uint8_t> bytes;
   ByteWriter w(bytes);
   w.put(kIndexMagic);
   w.put(std::uint32_t(pages.size()));
   w.put(std::uint64_t(times.size()));
-  w.put(value_min);
-  w.put(value_max);
+  const bool mapped = format_version >= kFirstMappedVersion;
+  if (mapped) {
+    w.put(value_min);
+    w.put(value_max);
+  } else {
+    w.put(float(value_min));
+    w.put(float(value_max));
+  }
   w.put_array(times);
   for (const PageEntry& p : pages) {
     w.put(p.offset);
@@ -60,6 +66,10 @@ std::vector<std::uint8_t> serialize_index(const std::vector<PageEntry>& pages, c
     w.put(p.bound);
     w.put(std::uint32_t(0));
     if (format_version >= kFirstCodedVersion) w.put(p.payload_bytes);
+    if (mapped) {
+      w.put(p.map.offset);
+      w.put(p.map.scale);
+    }
   }
   w.put(crc32(bytes.data(), bytes.size()));
   return bytes;
@@ -121,13 +131,15 @@ void FieldWriter::write_page(const EncodedPage& page) {
       detail::serialize_page(page, std::uint32_t(m_pages.size()), kContainerFormatVersion, m_entropy_level);
   PageEntry entry{m_offset, bytes.size(), page.first_step, page.step_count, page.method,
                   page.value_min, page.value_max, page.bound,
-                  detail::declared_payload_bytes(bytes.data() + detail::PageHeader::kBytes)};
+                  detail::declared_payload_bytes(bytes.data() + detail::PageHeader::kBytes), page.map};
   write_bytes(bytes.data(), bytes.size());
   if (std::fflush(m_file) != 0)
     throw Error(ErrorCode::io_error, "FieldWriter: flushing '" + m_partial + "' failed: " + std::strerror(errno));
-  if (m_pages.empty()) m_min = page.value_min, m_max = page.value_max;
-  m_min = std::min(m_min, page.value_min);
-  m_max = std::max(m_max, page.value_max);
+  // The map's scale is positive: it keeps the order of the stored values.
+  const double lo = page.map.value(page.value_min), hi = page.map.value(page.value_max);
+  if (m_pages.empty()) m_min = lo, m_max = hi;
+  m_min = std::min(m_min, lo);
+  m_max = std::max(m_max, hi);
   m_pages.push_back(entry);
   m_times.insert(m_times.end(), page.times.begin(), page.times.end());
 }

@@ -18,6 +18,8 @@
 namespace penumbra::compression::detail {
 
 constexpr std::uint32_t kFirstCodedVersion = 6;
+/// The first format version whose pages hold a ValueMap.
+constexpr std::uint32_t kFirstMappedVersion = 7;
 constexpr std::size_t kCodingPrefixBytes = 16;
 enum class PageCoding : std::uint32_t { stored = 0, zstd = 1 };
 

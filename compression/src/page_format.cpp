@@ -158,7 +158,7 @@ void reset_keeping_memory(EncodedPage& page) {
 // float, a slot and an exception's high part of up to 32 bits each, and an exception row's 4
 // bytes shared by 16 lanes; 16 bytes per value covers it.
 std::uint64_t max_payload_bytes(std::uint64_t N, std::uint32_t W, std::uint32_t K, std::uint32_t n) {
-  return 8ull * n + 16ull * K * (2ull * W + 8) + (N + kLaneBlock) * (16ull * n + 64) + 4096;
+  return 16 + 8ull * n + 16ull * K * (2ull * W + 8) + (N + kLaneBlock) * (16ull * n + 64) + 4096;
 }
 
 }  // namespace
@@ -175,6 +175,10 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   if (std::uint32_t(p.method) > max_method_of_version(format_version) || format_version > std::uint32_t(kContainerFormatVersion))
     throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) + " cannot hold a page of method " +
                                                  std::to_string(std::uint32_t(p.method)));
+  if (!p.map.identity() && format_version < kFirstMappedVersion)
+    throw Error(ErrorCode::invalid_argument, "format version " + std::to_string(format_version) +
+                                                 " cannot hold a page whose values are offset or scaled");
+  if (!p.map.valid()) throw Error(ErrorCode::invalid_argument, "a page's value map needs a finite offset and a power-of-two scale");
   if (!valid_entropy_level(entropy_level))
     throw Error(ErrorCode::invalid_argument, "entropy level " + std::to_string(entropy_level) + " is outside 0.." +
                                                  std::to_string(kMaxEntropyLevel));
@@ -182,6 +186,10 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   const bool coded = format_version >= kFirstCodedVersion;
   std::vector<std::uint8_t> bytes(PageHeader::kBytes + (coded ? kCodingPrefixBytes : 0), 0);
   ByteWriter w(bytes);
+  if (format_version >= kFirstMappedVersion) {
+    w.put(p.map.offset);
+    w.put(p.map.scale);
+  }
   w.put_array(p.times);
   if (has_vq(p.method)) {
     w.put(p.mean_lo);
@@ -307,6 +315,11 @@ void parse_page_payload(const PageHeader& h, const std::uint8_t* stored, std::ui
   p.sample_snr_db = h.sample_snr_db;
   p.vq_bytes_estimate = h.vq_bytes_estimate;
   p.predictive_bytes_estimate = h.predictive_bytes_estimate;
+  if (format_version >= kFirstMappedVersion) {
+    p.map.offset = r.get<double>();
+    p.map.scale = r.get<double>();
+    if (!p.map.valid()) r.fail("value map is corrupt (offset not finite, or scale not a positive power of two)");
+  }
   r.get_array(p.times, h.step_count);
   if (has_vq(p.method)) {
     p.mean_lo = r.get<float>();

@@ -3,6 +3,7 @@
 //
 // Payload, after the 64-byte header (from version 6 after its coding prefix, page_coding.h), in
 // this order (little-endian):
+//   (version 7)            f64 map offset, f64 map scale (ValueMap: field = offset + scale x stored)
 //   f64 times[steps]
 //   vq, vq_residual:       f32 mean lo, f32 mean scale, f32 c8[K x 8], f32 cw[K x steps]
 //                          (each entry's first `steps` values), u16 mean[N], u8 i8[N], u8 iw[N]

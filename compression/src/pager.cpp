@@ -192,6 +192,16 @@ void Pager::prepare(std::uint64_t step) {
 
 void Pager::read_step(std::uint64_t step, float* out) {
   require(out != nullptr, "Pager::read_step: null output");
+  narrow_through_map(decode_stored(step, out), out, m_field->info().vertex_count);
+}
+
+void Pager::read_step(std::uint64_t step, double* out) {
+  require(out != nullptr, "Pager::read_step: null output");
+  m_stored.resize(m_field->info().vertex_count);
+  apply_map(decode_stored(step, m_stored.data()), m_stored.data(), m_stored.size(), out);
+}
+
+ValueMap Pager::decode_stored(std::uint64_t step, float* out) {
   const std::size_t page = m_field->page_of_step(step);
   std::shared_ptr<const EncodedPage> data;
   bool load_waiting = false, load_running = false;
@@ -227,6 +237,7 @@ void Pager::read_step(std::uint64_t step, float* out) {
   std::optional<SerialScope> serial;
   if (load_running) serial.emplace();
   m_cursor.decode(data, std::uint32_t(step - data->first_step), out);
+  return data->map;
 }
 
 }  // namespace penumbra::compression

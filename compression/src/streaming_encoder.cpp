@@ -5,7 +5,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <limits>
+#include <string>
+#include <utility>
 
 #include "huge_pages.h"
 #include "page_coding.h"
@@ -100,28 +104,46 @@ void StreamingEncoder::wait_buffer_free(std::size_t buffer, bool count_as_solver
   rethrow_locked();
 }
 
-void StreamingEncoder::push(double time, const float* values) {
-  if (m_finished) throw Error(ErrorCode::invalid_operation, "StreamingEncoder::push: already finished");
-  require(values != nullptr, "StreamingEncoder::push: null values");
-  const std::uint64_t N = m_options.vertex_count;
-  // Reject bad values here, on the solver's thread, before anything is recorded.
-  float lo = values[0], hi = values[0];
-  for (std::uint64_t v = 0; v < N; ++v) {
-    const float x = values[v];
-    if (!std::isfinite(x))
-      throw Error(ErrorCode::invalid_argument, "StreamingEncoder::push: step " + std::to_string(m_step) +
-                                                   " (time " + std::to_string(time) + "), vertex " + std::to_string(v) +
-                                                   " is " + (std::isnan(x) ? "NaN" : "infinite") +
-                                                   "; the step was not recorded");
+namespace {
+
+[[noreturn]] void refuse_value(std::uint64_t step, double time, std::uint64_t vertex, const std::string& what) {
+  throw Error(ErrorCode::invalid_argument, "StreamingEncoder::push: step " + std::to_string(step) + " (time " +
+                                               std::to_string(time) + "), vertex " + std::to_string(vertex) + " " +
+                                               what + "; the step was not recorded");
+}
+
+// The finite range of one step's values; refuses the step at its first NaN or Inf.
+template <class T>
+std::pair<double, double> step_range(const T* values, std::uint64_t count, std::uint64_t step, double time) {
+  double lo = double(values[0]), hi = lo;
+  for (std::uint64_t v = 0; v < count; ++v) {
+    const double x = double(values[v]);
+    if (!std::isfinite(x)) refuse_value(step, time, v, std::string("is ") + (std::isnan(x) ? "NaN" : "infinite"));
     lo = std::min(lo, x);
     hi = std::max(hi, x);
   }
+  return {lo, hi};
+}
+
+// Rounds a bound in stored units down to float32, within float32's positive normal range.
+float stored_bound(double bound) {
+  float b = float(std::min(bound, double(std::numeric_limits<float>::max())));
+  if (double(b) > bound) b = std::nextafter(b, 0.f);
+  return std::max(b, std::numeric_limits<float>::min());
+}
+
+}  // namespace
+
+float* StreamingEncoder::next_step_slot() {
   if (m_filled == 0) wait_buffer_free(m_filling, true);
   else {
     std::lock_guard<std::mutex> lock(m_mutex);
     rethrow_locked();
   }
-  std::memcpy(m_buffers[m_filling].get() + std::uint64_t(m_filled) * N, values, N * 4);
+  return m_buffers[m_filling].get() + std::uint64_t(m_filled) * m_options.vertex_count;
+}
+
+void StreamingEncoder::commit_step(double time, double lo, double hi) {
   if (m_step == 0) m_min = lo, m_max = hi;
   m_min = std::min(m_min, lo);
   m_max = std::max(m_max, hi);
@@ -131,8 +153,76 @@ void StreamingEncoder::push(double time, const float* values) {
   if (m_filled == m_options.codec.window) submit(m_filled);
 }
 
+double StreamingEncoder::bound_with(double lo, double hi) const {
+  return m_step == 0 ? resolve_bound(m_options.codec.bound, lo, hi)
+                     : resolve_bound(m_options.codec.bound, std::min(m_min, lo), std::max(m_max, hi));
+}
+
+void StreamingEncoder::push(double time, const float* values) {
+  if (m_finished) throw Error(ErrorCode::invalid_operation, "StreamingEncoder::push: already finished");
+  require(values != nullptr, "StreamingEncoder::push: null values");
+  const std::uint64_t N = m_options.vertex_count;
+  // Reject bad values here, on the solver's thread, before anything is recorded.
+  const auto [lo, hi] = step_range(values, N, m_step, time);
+  if (m_filled == 0) m_map = ValueMap{}, m_narrowing = 0, m_reach = 0;
+  if (!m_map.identity()) {  // a window begun in double goes on in its map
+    const std::vector<double> wide(values, values + N);
+    push(time, wide.data());
+    return;
+  }
+  std::memcpy(next_step_slot(), values, N * 4);
+  m_reach = std::max({m_reach, std::fabs(lo), std::fabs(hi)});
+  commit_step(time, lo, hi);
+}
+
+void StreamingEncoder::push(double time, const double* values) {
+  if (m_finished) throw Error(ErrorCode::invalid_operation, "StreamingEncoder::push: already finished");
+  require(values != nullptr, "StreamingEncoder::push: null values");
+  const std::uint64_t N = m_options.vertex_count;
+  const auto [lo, hi] = step_range(values, N, m_step, time);
+  const ValueMap map = m_filled == 0 ? ValueMap::fit(values, N) : m_map;
+  // What float32 may cost before the codec: half the bound, leaving it the other half; without a
+  // bound, a tenth of what the VQ codec itself costs on smooth fields.
+  const double bound = bound_with(lo, hi);
+  const double range = 2 * (std::max(m_step ? m_max : hi, hi) / 2 - std::min(m_step ? m_min : lo, lo) / 2);
+  const double allowed = bound > 0 ? bound / 2 : 1e-4 * range;
+  float* slot = next_step_slot();
+  double worst = 0, reach = 0;
+  for (std::uint64_t v = 0; v < N; ++v) {
+    const float x = map.stored(values[v]);
+    const double moved = std::fabs(values[v] - map.value(x));
+    if (!std::isfinite(x) || (moved > allowed && range > 0)) {
+      char text[320];
+      if (!std::isfinite(x))
+        std::snprintf(text, sizeof text, "has the value %.17g, beyond float32's range around its window's reference %.17g (scale %.3g)",
+                      values[v], map.offset, map.scale);
+      else
+        std::snprintf(text, sizeof text,
+                      "has the value %.17g, which float32 around its window's reference %.17g moves by %.3g while the values vary by %.3g, "
+                      "beyond the %.3g it may lose (%s): the field drifted too far within one window; shorten the window",
+                      values[v], map.offset, moved, range, allowed, bound > 0 ? "half the error bound" : "1e-4 of the range without an error bound");
+      refuse_value(m_step, time, v, text);
+    }
+    slot[v] = x;
+    worst = std::max(worst, moved);
+    reach = std::max(reach, double(std::fabs(x)));
+  }
+  m_map = map;
+  if (m_filled == 0) m_narrowing = 0, m_reach = 0;
+  m_narrowing = std::max(m_narrowing, worst);
+  m_reach = std::max(m_reach, reach);
+  commit_step(time, lo, hi);
+}
+
 void StreamingEncoder::submit(std::uint32_t steps) {
-  Job job{m_filling, steps, m_step - steps, m_times, resolve_bound(m_options.codec.bound, m_min, m_max)};
+  // The codec holds its bound on the stored values; in the field's units that bound is what is
+  // left of the field's bound after float32's narrowing and the map's own rounding.
+  float bound = 0;
+  if (const double b = resolve_bound(m_options.codec.bound, m_min, m_max); b > 0) {
+    const double rounding = m_map.identity() ? 0 : 4 * std::numeric_limits<double>::epsilon() * (std::fabs(m_map.offset) + m_map.scale * m_reach);
+    bound = stored_bound((b - m_narrowing - rounding) / m_map.scale);
+  }
+  Job job{m_filling, steps, m_step - steps, m_times, m_map, bound};
   {
     std::lock_guard<std::mutex> lock(m_mutex);
     m_busy[m_filling] = true;
@@ -166,8 +256,9 @@ void StreamingEncoder::worker_loop() {
     try {
       if (!m_error) {
         WindowStats ws;
-        const auto page = encode_window(m_buffers[job.buffer].get(), m_options.vertex_count, job.steps,
-                                        job.times.data(), job.first_step, m_options.codec, job.bound, &m_warm, &ws);
+        auto page = encode_window(m_buffers[job.buffer].get(), m_options.vertex_count, job.steps,
+                                  job.times.data(), job.first_step, m_options.codec, job.bound, &m_warm, &ws);
+        page.map = job.map;
         m_writer->write_page(page);
         lock.lock();
         m_stats.pages++;

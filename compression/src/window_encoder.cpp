@@ -336,19 +336,20 @@ Coded encode_predictive(const float* x, std::uint32_t steps, float lo, float ste
 
 }  // namespace
 
-float resolve_bound(const ErrorBound& bound, float value_min, float value_max) {
+double resolve_bound(const ErrorBound& bound, double value_min, double value_max) {
   switch (bound.kind) {
     case BoundKind::none:
-      return 0.f;
+      return 0;
     case BoundKind::absolute:
-      return float(bound.value);
+      return bound.value;
     case BoundKind::range_relative: {
-      const double b = bound.value * (double(value_max) - double(value_min));
+      // Halves first: the range of values near DBL_MAX overflows.
+      const double b = 2 * bound.value * (value_max / 2 - value_min / 2);
       // A constant field has no range; hold it (nearly) exactly rather than not at all.
-      return float(std::max(b, double(std::numeric_limits<float>::min())));
+      return std::max(b, std::numeric_limits<double>::denorm_min());
     }
   }
-  return 0.f;
+  return 0;
 }
 
 EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::uint32_t step_count,

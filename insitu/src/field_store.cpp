@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 
 #include "penumbra/core/error.h"
 #include "stored_mesh.h"
@@ -23,50 +22,6 @@ std::string file_stem(const std::string& name) {
   for (char& c : s)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
   return s.empty() || s[0] == '.' ? "_" + s : s;
-}
-
-// The values as float32, in which the store keeps them (NaN stays NaN: the encoder reports it).
-// Refused instead, in one pass over the values:
-// - a finite value beyond float32's range, which would become infinite (named with its point);
-// - a field whose values are far larger than their variation (an absolute temperature, a pressure
-//   with a large ambient part) and so lose that variation in the narrowing: when the narrowing
-//   alone moves a value by more than the configured error bound, or, without a bound, by more than
-//   1e-4 of the step's range (a tenth of what the VQ codec itself costs on smooth fields), instead
-//   of storing a history that replays wrong.
-std::vector<float> narrow_for_store(const std::vector<double>& values, const compression::ErrorBound& bound,
-                                    const std::string& who) {
-  std::vector<float> out(values.size());
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo, worst = 0, at = 0;
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const double v = values[i];
-    if (std::isfinite(v) && std::fabs(v) > std::numeric_limits<float>::max()) {
-      char text[160];
-      std::snprintf(text, sizeof text, ": point %zu has the value %.17g, beyond float32's range (|v| <= %.9g) in which the store keeps values",
-                    i, v, static_cast<double>(std::numeric_limits<float>::max()));
-      throw Error(ErrorCode::invalid_argument, who + text);
-    }
-    out[i] = static_cast<float>(v);
-    if (!std::isfinite(v)) continue;
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-    const double e = std::fabs(v - static_cast<double>(out[i]));
-    if (e > worst) {
-      worst = e;
-      at = v;
-    }
-  }
-  const double range = hi - lo;
-  if (!(range > 0)) return out;  // constant: float32 holds its one value as well as it can
-  const double allowed = bound.kind == compression::BoundKind::absolute         ? bound.value
-                         : bound.kind == compression::BoundKind::range_relative ? bound.value * range
-                                                                                : 1e-4 * range;
-  if (worst <= allowed) return out;
-  char text[400];
-  std::snprintf(text, sizeof text,
-                ": float32, in which the store keeps values, moves them by up to %.3g (at %.9g) while they vary by %.3g, "
-                "beyond the %.3g the store may lose (%s); store the field minus a reference value, or render it in situ only",
-                worst, at, range, allowed, bound.kind == compression::BoundKind::none ? "1e-4 of the range without an error bound" : "its error bound");
-  throw Error(ErrorCode::invalid_argument, who + text);
 }
 
 }  // namespace
@@ -129,10 +84,8 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
       throw;
     }
   }
-  const std::string who = "store: field '" + field + "' at cycle " + std::to_string(cycle);
-  const std::vector<float> narrowed = narrow_for_store(values, m_config.codec.bound, who);
   try {
-    enc->push(time, narrowed.data());
+    enc->push(time, values.data());
   } catch (const Error& e) {
     throw Error(e.code(), "store: field '" + field + "' at cycle " + std::to_string(cycle) + ": " + e.what());
   }

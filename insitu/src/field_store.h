@@ -32,9 +32,11 @@ public:
   void begin_segment(const MeshView& mesh);
   /// Whether `cycle` is a recorded step (every_cycles).
   bool records(std::int64_t cycle) const;
-  /// Adds one step of `field` (one value per mesh point), kept as float32. Throws Error naming the
-  /// field and the point for NaN/Inf values and for values beyond float32's range: that step of
-  /// that field is then not stored.
+  /// Adds one step of `field` (one value per mesh point), kept as float32 around a double offset
+  /// and scale per window (compression::ValueMap), so that fields of any magnitude or offset keep
+  /// their variation and the error bound. Throws Error naming the field, the cycle and the point
+  /// for NaN/Inf values and for a step that drifted beyond what its window's map holds: that step
+  /// of that field is then not stored.
   void record(const std::string& field, double time, std::int64_t cycle, const std::vector<double>& values);
   /// Completes every file of the current segment. Idempotent.
   void finish();

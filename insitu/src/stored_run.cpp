@@ -112,7 +112,8 @@ void StoredRun::start_at(std::size_t step) {
   }
 }
 
-void StoredRun::read(const std::string& field, std::size_t step, std::vector<float>& out) {
+template <class T>
+void StoredRun::read_values(const std::string& field, std::size_t step, std::vector<T>& out) {
   auto it = m_impl->fields.find(field);
   if (it == m_impl->fields.end()) throw Error(ErrorCode::invalid_argument, "stored run: no field '" + field + "'");
   require(step < step_count(), "stored run: step " + std::to_string(step) + " is beyond the " +
@@ -123,6 +124,14 @@ void StoredRun::read(const std::string& field, std::size_t step, std::vector<flo
                                                  std::to_string(time(step)));
   out.resize(m_impl->view.point_count());
   it->second.pager->read_step(static_cast<std::uint64_t>(own), out.data());
+}
+
+void StoredRun::read(const std::string& field, std::size_t step, std::vector<float>& out) {
+  read_values(field, step, out);
+}
+
+void StoredRun::read(const std::string& field, std::size_t step, std::vector<double>& out) {
+  read_values(field, step, out);
 }
 
 }  // namespace penumbra::insitu

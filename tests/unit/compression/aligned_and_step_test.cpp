@@ -254,8 +254,9 @@ TEST(AlignedFile, AShiftOutsideThePageIsRejectedEvenUnderValidChecksums) {
   ASSERT_EQ(field->page(0).method, PageMethod::vq_aligned);
   auto bytes = testing::read_file(path);
   const std::size_t page = field->page(0).offset, payload = page + 64;
-  // The coding prefix, times, 4 floats, codebook (4 x 31 u16), levels (40 u16), then the shifts.
-  const std::size_t shift0 = payload + 16 + 16 * 8 + 16 + 4 * 31 * 2 + 40 * 2;
+  // The coding prefix, the value map, times, 4 floats, codebook (4 x 31 u16), levels (40 u16),
+  // then the shifts.
+  const std::size_t shift0 = payload + 16 + 16 + 16 * 8 + 16 + 4 * 31 * 2 + 40 * 2;
   bytes[shift0] = char(16);  // the page has steps 0..15
   const std::uint32_t payload_crc = crc32_reference(bytes.data() + payload, field->page(0).bytes - 64);
   std::memcpy(bytes.data() + page + 44, &payload_crc, 4);

@@ -16,6 +16,7 @@
 #include "context.h"
 #include "fixtures/meshes.h"
 #include "penumbra/core/error.h"
+#include "penumbra/insitu/stored_run.h"
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "test_util.h"
@@ -128,54 +129,120 @@ TEST(FieldValues, AConstantFieldOfAnyMagnitudeShowsAsAConstant) {
   }
 }
 
-// The store keeps float32 values: a field beyond float32's range is refused there with the point
-// and the limit, while the step's images (rendered from the double values) are still written.
-TEST(FieldValues, TheStoreRefusesValuesBeyondFloat32AndTheImagesAreStillWritten) {
-  TempDir tmp;
-  std::vector<double> v = base_field();
-  for (double& x : v) x = 1e40 * (x + 2);
-  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])",
-                                                 R"(, "store": {"directory": ")" + (tmp / "store") + R"("})")));
-  ctx.publish_mesh(mesh().view());
-  ctx.publish_field(fixtures::point_field("T", v), false);
-  try {
-    ctx.execute(0.0, 1);
-    ADD_FAILURE() << "expected the store to refuse the values";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
-    EXPECT_NE(std::string(e.what()).find("field 'T'"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("beyond float32's range"), std::string::npos) << e.what();
-  }
-  const auto rows = CinemaDatabase::parse_csv(testing::read_text(tmp / "db/data.csv"), "data.csv");
-  EXPECT_EQ(rows.size(), 3u);  // header and the two cameras' images
+/// Step `step` of a drifting, growing field: a (v (1 + 0.1 step) + 2 offset + 0.05 step).
+std::vector<double> drifting_step(const std::vector<double>& v, double a, double offset, int step) {
+  std::vector<double> t(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) t[i] = a * (v[i] * (1 + 0.1 * step) + offset * 2 + 0.05 * step);
+  return t;
 }
 
-// A field whose offset dwarfs its variation loses the variation in float32, which the store keeps:
-// refused beyond the error bound (here 1e-3 of the range), stored within it.
-TEST(FieldValues, TheStoreRefusesAFieldThatFloat32CannotHoldWithinItsBound) {
+/// Records `steps` steps of drifting_step through a Context whose store keeps them at a
+/// range-relative bound `bound` in windows of 8; returns the store's segment directory.
+std::string store_steps(const std::string& dir, const std::vector<double>& v, double a, double offset, int steps,
+                        double bound = 1e-3) {
+  Context ctx(parse_config(testing::small_config(dir + "/db", R"([{"name": "T"}])",
+                                                 R"(, "store": {"directory": ")" + dir + R"(/store", "window": 8,
+                                                     "error_bound": {"relative": )" + std::to_string(bound) + "}}")));
+  ctx.publish_mesh(mesh().view());
+  for (int s = 0; s < steps; ++s) {
+    const std::vector<double> values = drifting_step(v, a, offset, s);  // borrowed until execute returns
+    ctx.publish_field(fixtures::point_field("T", values), false);
+    EXPECT_TRUE(ctx.execute(0.1 * s, s));
+  }
+  return dir + "/store/segment-000";
+}
+
+// The store keeps each window in float32 around a double offset and scale (compression::ValueMap):
+// a field of any magnitude whose offset dwarfs its variation comes back within its error bound,
+// in its own units: 1e-3 of the range seen up to the end of the value's window (the streaming
+// encoder's range-relative bound; windows of 8 steps).
+TEST(FieldValues, TheStoreHoldsItsBoundForFieldsOfAnyMagnitudeAndOffset) {
   TempDir tmp;
   const std::vector<double> v = base_field();
-  for (const double offset : {1e2, 1e9}) {
-    std::vector<double> t(v.size());
-    for (std::size_t i = 0; i < v.size(); ++i) t[i] = v[i] + 2 * offset;  // range about 2
-    const std::string dir = tmp / std::to_string(static_cast<long long>(offset));
-    Context ctx(parse_config(testing::small_config(dir + "/db", R"([{"name": "T"}])",
-                                                   R"(, "store": {"directory": ")" + dir + R"(/store", "error_bound": {"relative": 0.001}})")));
-    ctx.publish_mesh(mesh().view());
-    ctx.publish_field(fixtures::point_field("T", t), false);
-    if (offset < 1e3) {
-      EXPECT_TRUE(ctx.execute(0.0, 1));  // float32 resolves 2e2 to 1.5e-5: within 2e-3
-      continue;
+  int case_index = 0;
+  for (double magnitude : {1e-300, 1.0, 1e40, 1e300})
+    for (double offset : {0.0, 1e9}) {
+      const double a = magnitude / (1 + 2 * offset);
+      const int steps = 12;
+      const auto run = StoredRun::open(store_steps(tmp / std::to_string(case_index++), v, a, offset, steps));
+      ASSERT_EQ(run->step_count(), std::size_t(steps));
+      std::vector<double> back, lo(steps), hi(steps);
+      for (int s = 0; s < steps; ++s) {
+        const std::vector<double> t = drifting_step(v, a, offset, s);
+        lo[s] = std::min(*std::min_element(t.begin(), t.end()), s ? lo[s - 1] : t[0]);
+        hi[s] = std::max(*std::max_element(t.begin(), t.end()), s ? hi[s - 1] : t[0]);
+      }
+      for (int s = 0; s < steps; ++s) {
+        const int window_end = std::min(s / 8 * 8 + 7, steps - 1);
+        const double bound = 1e-3 * (hi[window_end] - lo[window_end]);
+        run->read("T", s, back);
+        const std::vector<double> truth = drifting_step(v, a, offset, s);
+        double worst = 0;
+        for (std::size_t i = 0; i < truth.size(); ++i) worst = std::max(worst, std::fabs(back[i] - truth[i]));
+        EXPECT_LE(worst, bound) << "magnitude " << magnitude << ", offset " << offset << ", step " << s;
+        EXPECT_GT(worst, 0.01 * bound) << "a lossy store that hardly loses anything is suspect";
+      }
     }
+}
+
+// The replayed history renders like the exact field, whatever the field's magnitude and offset
+// (same tolerance as in situ), at a bound of 1e-6 of the range: well below an 8-bit level of
+// colour and of opacity over this transfer function's steepest segment.
+TEST(FieldValues, TheStoresReplayRendersLikeTheExactField) {
+  TempDir tmp;
+  const std::vector<double> v = base_field();
+  const std::string tf = "{" + colours_and_opacities(0, 1) + "}", lighting = R"({"model": "phong"})";
+  const int step = 5;
+  const std::vector<double> exact = drifting_step(v, 1, 0, step);
+  const auto reference = render_step(tmp / "exact", exact, "cpu", lighting, tf);
+  int case_index = 0;
+  for (double magnitude : {1e-300, 1.0, 1e40, 1e300}) {
+    const double offset = magnitude == 1 ? 0 : 1e9, a = magnitude / (1 + 2 * offset);
+    std::vector<double> back;
+    StoredRun::open(store_steps(tmp / std::to_string(case_index), v, a, offset, 8, 1e-6))->read("T", step, back);
+    const auto image = render_step(tmp / (std::to_string(case_index++) + "-image"), back, "cpu", lighting, tf);
+    int worst = 0;
+    for (std::size_t i = 0; i < image.size(); ++i) worst = std::max(worst, std::abs(int(image[i]) - int(reference[i])));
+    const double rms = render::rms_difference_pct(image, reference);
+    std::printf("[field-values] replay, magnitude %g, offset %g x range: rms %.4f %%, max %d levels\n", magnitude, offset, rms, worst);
+    EXPECT_LE(rms, 0.02) << magnitude;
+    EXPECT_LE(worst, 2) << magnitude;
+  }
+}
+
+// A step that drifted so far from its window's first step that float32 around that step's
+// reference cannot hold it within an absolute bound (1e12 away, where float32's spacing is 65536,
+// against a bound of 1e-3) is refused, naming the field, the cycle and the drift; the step's
+// images are still written and the steps before it stay stored.
+TEST(FieldValues, TheStoreRefusesAStepThatDriftedFarBeyondItsWindowsFirst) {
+  TempDir tmp;
+  const std::vector<double> v = base_field();
+  {
+    Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])",
+                                                   R"(, "store": {"directory": ")" + (tmp / "store") + R"(", "window": 8,
+                                                       "error_bound": {"absolute": 0.001}})")));
+    ctx.publish_mesh(mesh().view());
+    ctx.publish_field(fixtures::point_field("T", v), false);
+    EXPECT_TRUE(ctx.execute(0.0, 0));
+    std::vector<double> far(v);
+    for (double& x : far) x += 1e12;
+    ctx.publish_field(fixtures::point_field("T", far), false);
     try {
-      ctx.execute(0.0, 1);
-      ADD_FAILURE() << "expected the store to refuse the field";
+      ctx.execute(0.1, 1);
+      ADD_FAILURE() << "expected the store to refuse the step";
     } catch (const Error& e) {
       EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
-      EXPECT_NE(std::string(e.what()).find("float32, in which the store keeps values, moves them by up to"), std::string::npos)
-          << e.what();
+      for (const char* part : {"field 'T'", "cycle 1", "drifted too far within one window"})
+        EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
     }
+    const auto rows = CinemaDatabase::parse_csv(testing::read_text(tmp / "db/data.csv"), "data.csv");
+    EXPECT_EQ(rows.size(), 5u);  // header and both steps' two images
   }
+  const auto run = StoredRun::open(tmp / "store/segment-000");
+  ASSERT_EQ(run->step_count(), 1u);
+  std::vector<double> back;
+  run->read("T", 0, back);
+  for (std::size_t i = 0; i < v.size(); ++i) ASSERT_NEAR(back[i], v[i], 1e-3) << i;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "penumbra/compression/codec_params.h"
+#include "penumbra/compression/value_map.h"
 #include "penumbra/core/aligned_allocator.h"
 
 namespace penumbra::compression {
@@ -70,7 +71,8 @@ struct LaneBlocks {
 ///   vq_aligned:   mean(v) + ca[ia[v]][t + window - 1 - shift[v]]  (mean(v) is the level)
 ///   vq_aligned_residual: vq_aligned + float(q) * step, or raw values
 ///   predictive, predictive_lanes: lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
-/// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale.
+/// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale. These are the stored values; the
+/// field's values are map.value(stored) (ValueMap; the identity for float32 input).
 struct EncodedPage {
   PageMethod method = PageMethod::vq;
   std::uint64_t first_step = 0;
@@ -79,8 +81,9 @@ struct EncodedPage {
   std::uint32_t codebook_size = 0;
   std::uint64_t vertex_count = 0;
   std::vector<double> times;  ///< time value of each of the step_count steps
-  float value_min = 0, value_max = 0;
-  /// Error bound this page holds at every value (0: none).
+  ValueMap map;               ///< from stored values to the field's (format version 7)
+  float value_min = 0, value_max = 0;  ///< of the stored values
+  /// Error bound this page holds at every stored value (0: none); map.scale x bound in the field's units.
   float bound = 0;
   /// Why `method` was chosen (recorded in the page header): VQ's signal-to-noise ratio on
   /// the training sample, and the estimated bytes of VQ (+ residual) and of the predictive coder.

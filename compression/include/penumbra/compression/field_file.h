@@ -10,6 +10,7 @@
 
 #include "penumbra/compression/codec_params.h"
 #include "penumbra/compression/encoded_page.h"
+#include "penumbra/compression/value_map.h"
 
 namespace penumbra::compression {
 
@@ -29,8 +30,9 @@ struct PageEntry {
   std::uint64_t first_step = 0;
   std::uint32_t step_count = 0;
   PageMethod method = PageMethod::vq;
-  float value_min = 0, value_max = 0, bound = 0;
+  float value_min = 0, value_max = 0, bound = 0;  ///< of the stored values (EncodedPage)
   std::uint64_t payload_bytes = 0;  ///< the payload's once loaded (compressed on disk from format version 6)
+  ValueMap map;                     ///< the page's (format version 7; identity before)
 };
 
 /// Writes one field's file: versioned header, one page per window, then an index trailer
@@ -62,7 +64,7 @@ private:
   std::uint64_t m_offset = 0;
   std::vector<PageEntry> m_pages;
   std::vector<double> m_times;
-  float m_min = 0, m_max = 0;
+  double m_min = 0, m_max = 0;  ///< in the field's units
   bool m_finished = false;
 };
 
@@ -98,8 +100,9 @@ public:
   const FieldInfo& info() const { return m_info; }
   std::uint64_t step_count() const { return m_times.size(); }
   const std::vector<double>& times() const { return m_times; }
-  float value_min() const { return m_min; }
-  float value_max() const { return m_max; }
+  /// The range of the field's values (through each page's map), in double.
+  double value_min() const { return m_min; }
+  double value_max() const { return m_max; }
   std::size_t page_count() const { return m_pages.size(); }
   const PageEntry& page(std::size_t index) const { return m_pages.at(index); }
   /// Index of the page holding global step t (throws for t >= step_count()).
@@ -115,8 +118,10 @@ public:
   /// The same, reading into buffers.bytes and parsing into buffers.spare if nothing else holds
   /// it (the page returned is then that object, and spare is left empty).
   std::shared_ptr<const EncodedPage> load_page(std::size_t index, PageBuffers& buffers) const;
-  /// Unpaged random access: loads the page of step t and decodes all vertices into out.
+  /// Unpaged random access: loads the page of step t and decodes all vertices' values into out
+  /// (as float32: see narrow_through_map; the double overload keeps what a page's map holds).
   void read_step(std::uint64_t step, float* out) const;
+  void read_step(std::uint64_t step, double* out) const;
   /// Loads every page (checksums and structure); throws naming the first bad one.
   void verify() const;
 
@@ -127,9 +132,10 @@ private:
   FieldInfo m_info;
   std::vector<PageEntry> m_pages;
   std::vector<double> m_times;
-  float m_min = 0, m_max = 0;
+  double m_min = 0, m_max = 0;
   std::uint64_t m_file_bytes = 0;
   std::uint32_t m_version = 0;
+  bool m_maps_from_pages = false;  ///< while recovery reads the pages of a file without its index
   std::uint32_t max_method() const;
 };
 

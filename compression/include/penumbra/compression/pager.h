@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/window_codec.h"
@@ -56,12 +57,16 @@ public:
   void prepare(std::uint64_t step);
   /// Whether the page of `step` is loaded (a read of it would not wait).
   bool resident(std::uint64_t step) const;
-  /// Decodes global step `step` for all vertices into out[vertex_count].
+  /// Decodes global step `step` for all vertices into out[vertex_count]: the field's values as
+  /// float32 (narrow_through_map), or in double, keeping what each page's map holds.
   void read_step(std::uint64_t step, float* out);
+  void read_step(std::uint64_t step, double* out);
   PagerStats stats() const;
   const CompressedField& field() const { return *m_field; }
 
 private:
+  /// read_step's stored values into out; returns the page's map.
+  ValueMap decode_stored(std::uint64_t step, float* out);
   void prefetch_loop();
   void request_prefetch_locked(std::size_t page);
   /// Playback is on `page`: keeps it and the next, drops the rest, prefetches the next.
@@ -90,6 +95,7 @@ private:
   bool m_stop = false;
   PagerStats m_stats;
   StepCursor m_cursor;  ///< O(1) sequential steps of predictive pages
+  std::vector<float> m_stored;  ///< the double read's stored values
   std::thread m_thread;
 };
 

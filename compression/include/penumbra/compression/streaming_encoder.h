@@ -12,6 +12,7 @@
 
 #include "penumbra/compression/codec_params.h"
 #include "penumbra/compression/field_file.h"
+#include "penumbra/compression/value_map.h"
 #include "penumbra/compression/window_codec.h"
 
 namespace penumbra::compression {
@@ -53,6 +54,13 @@ public:
   /// Adds the next time step (vertex_count values). Throws Error(invalid_argument) naming
   /// the vertex of a NaN/Inf value; that step is then not recorded.
   void push(double time, const float* values);
+  /// The same for values in double: each window stores them through a ValueMap fitted to its
+  /// first step, so that any finite field keeps its variation (and the error bound holds in the
+  /// field's units) whatever its magnitude or offset. A later step of the window that drifted so
+  /// far from the first that float32 in that map moves a value by more than half the error bound
+  /// (without a bound: 1e-4 of the range seen so far) is refused with Error(invalid_argument)
+  /// naming the step, the vertex and both amounts, and not recorded.
+  void push(double time, const double* values);
   void finish();
   StreamingStats stats() const;
 
@@ -65,10 +73,17 @@ private:
     std::uint32_t steps;
     std::uint64_t first_step;
     std::vector<double> times;
-    float bound;
+    ValueMap map;
+    float bound;  ///< in stored units
   };
   void worker_loop();
   void submit(std::uint32_t steps);
+  /// Waits until the window buffer being filled may take the next step; returns where it goes.
+  float* next_step_slot();
+  /// Counts a step whose values are in the buffer, with their range; submits a full window.
+  void commit_step(double time, double lo, double hi);
+  /// The error bound in the field's units over the range seen so far with [lo, hi] (0: none).
+  double bound_with(double lo, double hi) const;
   void wait_buffer_free(std::size_t buffer, bool count_as_solver_wait);
   void rethrow_locked();
 
@@ -80,7 +95,10 @@ private:
   std::uint32_t m_filled = 0;
   std::uint64_t m_step = 0;
   std::vector<double> m_times;
-  float m_min = 0, m_max = 0;
+  double m_min = 0, m_max = 0;  ///< of the values pushed, in the field's units
+  ValueMap m_map;               ///< of the window being filled
+  double m_narrowing = 0;       ///< the most float32 moved a value of that window, in the field's units
+  double m_reach = 0;           ///< the largest |stored value| of that window
   bool m_finished = false;
 
   mutable std::mutex m_mutex;

@@ -17,5 +17,8 @@ namespace penumbra::compression {
 ///      ending at step 6
 ///   6  each page's payload follows a 16-byte coding prefix and may be one zstd frame
 ///      (CodecParams::entropy_level); the payloads' layouts are unchanged
-constexpr int kContainerFormatVersion = 6;
+///   7  each page's payload starts with its ValueMap (f64 offset, f64 scale); the index holds
+///      each page's map and the field's range in double, in the field's units. Pages of older
+///      versions read with the identity map
+constexpr int kContainerFormatVersion = 7;
 }  // namespace penumbra::compression

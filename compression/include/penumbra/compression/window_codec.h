@@ -41,8 +41,9 @@ EncodedPage encode_window(const float* steps, std::uint64_t vertex_count, std::u
                           const double* times, std::uint64_t first_step, const CodecParams& params, float bound_abs,
                           WarmStart* warm = nullptr, WindowStats* stats = nullptr);
 
-/// The absolute bound for a window given the value range seen so far (0: no bound).
-float resolve_bound(const ErrorBound& bound, float value_min, float value_max);
+/// The absolute bound for a window given the value range seen so far (0: no bound), in the
+/// units of the values.
+double resolve_bound(const ErrorBound& bound, double value_min, double value_max);
 
 /// Decodes step `local_step` of the page for all vertices into out[vertex_count]. VQ and
 /// residual pages: O(1) per vertex (the residual is one read at the vertex's known section

@@ -36,10 +36,15 @@ public:
   /// begins there: a caller that sets up its renderer meanwhile does not wait at its first read.
   void start_at(std::size_t step);
   /// Decodes `field` at `step` for every point into `out` (resized). Sequential reads are
-  /// paged: the next window is prefetched while the current one is read.
+  /// paged: the next window is prefetched while the current one is read. In double the values
+  /// keep what the store held of a field far from zero or beyond float32 (FieldStore::record);
+  /// in float32 they are narrowed.
+  void read(const std::string& field, std::size_t step, std::vector<double>& out);
   void read(const std::string& field, std::size_t step, std::vector<float>& out);
 
 private:
+  template <class T>
+  void read_values(const std::string& field, std::size_t step, std::vector<T>& out);
   StoredRun();
   struct Impl;
   std::unique_ptr<Impl> m_impl;
