@@ -65,7 +65,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
     err << "penumbra-replay: " << what << "\n";
   };
   const MeshView& m = run->mesh();
-  pnb_mesh_desc mesh{};
+  pnb_mesh_desc mesh PNB_MESH_DESC_INIT;
   mesh.points = m.points.data;
   mesh.point_count = static_cast<std::int64_t>(m.point_count());
   mesh.point_stride_bytes = m.points.stride_bytes;
@@ -92,7 +92,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
         fail("step " + std::to_string(s) + ": " + e.what());
         continue;
       }
-      pnb_field_desc field{};
+      pnb_field_desc field PNB_FIELD_DESC_INIT;
       field.name = name.c_str();
       field.association = PNB_POINT_FIELD;
       field.values = values[f].data();

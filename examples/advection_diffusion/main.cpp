@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
   pnb_context ctx = nullptr;
   if (!ok(nullptr, pnb_create(config_json(out).c_str(), &ctx), "pnb_create")) return 1;
 
-  pnb_mesh_desc desc{};
+  pnb_mesh_desc desc PNB_MESH_DESC_INIT;
   desc.points = mesh.xyz.data();
   desc.point_count = static_cast<std::int64_t>(mesh.xyz.size() / 3);
   desc.point_type = PNB_FLOAT32;
@@ -180,8 +180,13 @@ int main(int argc, char** argv) {
   for (int cycle = 0; cycle <= cycles; ++cycle) {
     // Republishing an unchanged topology_version each step costs nothing.
     if (!ok(ctx, pnb_publish_mesh(ctx, &desc, PNB_BORROW), "pnb_publish_mesh")) break;
-    pnb_field_desc t{"temperature", PNB_POINT_FIELD, solver.temperature.data(), desc.point_count, 1, 0, PNB_FLOAT64};
-    pnb_field_desc p{"pressure", PNB_POINT_FIELD, pressure.data(), desc.point_count, 1, 0, PNB_FLOAT64};
+    pnb_field_desc t PNB_FIELD_DESC_INIT, p PNB_FIELD_DESC_INIT;
+    t.name = "temperature";
+    t.values = solver.temperature.data();
+    t.count = desc.point_count;
+    p.name = "pressure";
+    p.values = pressure.data();
+    p.count = desc.point_count;
     ok(ctx, pnb_publish_field(ctx, &t, PNB_BORROW), "pnb_publish_field");
     ok(ctx, pnb_publish_field(ctx, &p, PNB_BORROW), "pnb_publish_field");
     const auto t0 = std::chrono::steady_clock::now();

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   static const uint8_t hex_type = PNB_HEXAHEDRON;
   char config[2048];
   pnb_context ctx = NULL;
-  pnb_mesh_desc mesh;
+  pnb_mesh_desc mesh = PNB_MESH_DESC_INIT;
   int i, j, k, c, cycle, failures = 0;
   const double h = 1.0 / NY;
 
@@ -80,7 +80,6 @@ int main(int argc, char** argv) {
            out);
   if (!check(NULL, pnb_create(config, &ctx), "pnb_create")) return 1;
 
-  memset(&mesh, 0, sizeof mesh);
   mesh.points = xyz;
   mesh.point_count = NPTS;
   mesh.point_type = PNB_FLOAT64;
@@ -97,13 +96,20 @@ int main(int argc, char** argv) {
   }
   /* The conductivity does not change: publish it once as a copy, Penumbra keeps it. */
   {
-    pnb_field_desc f = {"conductivity", PNB_CELL_FIELD, conductivity, NCELLS, 1, 0, PNB_FLOAT64};
+    pnb_field_desc f = PNB_FIELD_DESC_INIT;
+    f.name = "conductivity";
+    f.association = PNB_CELL_FIELD;
+    f.values = conductivity;
+    f.count = NCELLS;
     check(ctx, pnb_publish_field(ctx, &f, PNB_COPY), "pnb_publish_field(conductivity)");
   }
 
   for (cycle = 0; cycle <= 1000; ++cycle) {
     const double dt = 0.12 * h * h; /* explicit diffusion limit h^2 / (6 k_max), with margin */
-    pnb_field_desc t = {"temperature", PNB_POINT_FIELD, temperature, NPTS, 1, 0, PNB_FLOAT64};
+    pnb_field_desc t = PNB_FIELD_DESC_INIT;
+    t.name = "temperature";
+    t.values = temperature;
+    t.count = NPTS;
     check(ctx, pnb_publish_field(ctx, &t, PNB_BORROW), "pnb_publish_field(temperature)");
     if (!check(ctx, pnb_execute(ctx, cycle * dt, cycle), "pnb_execute")) ++failures;
 

@@ -18,6 +18,9 @@ program heat_fortran
   type(pnb_step_stats) :: stats
   integer :: i, j, k, c, s, status, p
 
+  ! The types' struct_size defaults must be their C sizes (insitu/fortran/CMakeLists.txt).
+  if (mesh%struct_size /= c_sizeof(mesh) .or. field%struct_size /= c_sizeof(field) .or. &
+      stats%struct_size /= c_sizeof(stats)) error stop 'penumbra module: struct sizes differ from the C ones'
   outdir = 'penumbra-fortran-db'
   if (command_argument_count() >= 1) call get_command_argument(1, outdir)
 

@@ -9,6 +9,7 @@
 #include "context.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
+#include "sized_structs.h"
 
 struct pnb_context_s {
   std::unique_ptr<penumbra::insitu::Context> context;
@@ -16,6 +17,13 @@ struct pnb_context_s {
 };
 
 namespace {
+
+// The sizes of the first layouts with struct_size (ABI 2), padding included: the smallest struct
+// a caller may pass. A member added later starts at or after these sizes (never in the padding,
+// which an older caller leaves unset); these constants then keep the ABI-2 sizes.
+constexpr std::size_t kFirstMeshDescBytes = sizeof(pnb_mesh_desc);
+constexpr std::size_t kFirstFieldDescBytes = sizeof(pnb_field_desc);
+constexpr std::size_t kFirstStepStatsBytes = sizeof(pnb_step_stats);
 
 using penumbra::Error;
 using penumbra::ErrorCode;
@@ -158,8 +166,10 @@ pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_owne
   return guarded(ctx, [&] {
     penumbra::require(mesh != nullptr, "pnb_publish_mesh: mesh is NULL");
     penumbra::require(valid_ownership(own), "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
+    const pnb_mesh_desc d = penumbra::insitu::read_sized(*mesh, pnb_mesh_desc PNB_MESH_DESC_INIT, kFirstMeshDescBytes,
+                                                         "pnb_publish_mesh", "pnb_mesh_desc", "PNB_MESH_DESC_INIT");
     // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
-    ctx->context->publish_mesh(mesh_view(*mesh));
+    ctx->context->publish_mesh(mesh_view(d));
   });
 }
 
@@ -168,7 +178,9 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
   return guarded(ctx, [&] {
     penumbra::require(field != nullptr, "pnb_publish_field: field is NULL");
     penumbra::require(valid_ownership(own), "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
-    ctx->context->publish_field(field_view(*field), raw(own) == PNB_COPY);
+    const pnb_field_desc d = penumbra::insitu::read_sized(*field, pnb_field_desc PNB_FIELD_DESC_INIT, kFirstFieldDescBytes,
+                                                          "pnb_publish_field", "pnb_field_desc", "PNB_FIELD_DESC_INIT");
+    ctx->context->publish_field(field_view(d), raw(own) == PNB_COPY);
   });
 }
 
@@ -182,14 +194,15 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
   return guarded(ctx, [&] {
     penumbra::require(out != nullptr, "pnb_last_step: out is NULL");
     const penumbra::insitu::StepStats& s = ctx->context->last_step();
-    *out = {};
-    out->cycle = s.cycle;
-    out->images = s.images;
-    out->render_ms = s.render_ms;
-    out->total_ms = s.total_ms;
-    out->light_ms = s.light_ms;
-    out->light_residual = s.light.residual;
-    out->light_converged = s.light.converged ? 1 : 0;
+    pnb_step_stats stats PNB_STEP_STATS_INIT;
+    stats.cycle = s.cycle;
+    stats.images = s.images;
+    stats.render_ms = s.render_ms;
+    stats.total_ms = s.total_ms;
+    stats.light_ms = s.light_ms;
+    stats.light_residual = s.light.residual;
+    stats.light_converged = s.light.converged ? 1 : 0;
+    penumbra::insitu::write_sized(stats, out, kFirstStepStatsBytes, "pnb_last_step", "pnb_step_stats", "PNB_STEP_STATS_INIT");
   });
 }
 

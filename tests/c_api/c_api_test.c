@@ -70,8 +70,7 @@ static void build_mesh(void) {
 
 static pnb_mesh_desc good_mesh(void) {
   static const uint8_t tet_type = PNB_TETRA;
-  pnb_mesh_desc m;
-  memset(&m, 0, sizeof m);
+  pnb_mesh_desc m = PNB_MESH_DESC_INIT;
   m.points = g_points;
   m.point_count = NP;
   m.point_type = PNB_FLOAT32;
@@ -86,7 +85,7 @@ static pnb_mesh_desc good_mesh(void) {
 }
 
 static pnb_field_desc good_field(const char* name) {
-  pnb_field_desc f;
+  pnb_field_desc f = PNB_FIELD_DESC_INIT;
   f.name = name;
   f.association = PNB_POINT_FIELD;
   f.values = g_values;
@@ -199,6 +198,13 @@ static void test_mesh_errors(pnb_context ctx) {
   tets[4 * 5 + 3] = tets[4 * 5 + 2];  /* a repeated vertex flattens the tet */
   m = good_mesh(); m.connectivity = tets;
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "cell 5 has zero volume", "zero-volume cell");
+  m = good_mesh(); m.struct_size = 0;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "pnb_mesh_desc.struct_size is 0: initialise the struct with PNB_MESH_DESC_INIT",
+           "an uninitialised struct_size");
+  m = good_mesh(); m.struct_size = 8;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "struct_size is 8, not the size of any version of pnb_mesh_desc", "a struct too small");
+  m = good_mesh(); m.struct_size = sizeof m + 8;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "built against a later Penumbra", "a struct from a later version");
 }
 
 static void test_field_errors(pnb_context ctx) {
@@ -206,6 +212,9 @@ static void test_field_errors(pnb_context ctx) {
   expect(pnb_publish_field(ctx, NULL, PNB_BORROW), PNB_INVALID_ARGUMENT, ctx, "field is NULL", "NULL field");
   f = good_field(NULL);
   expect(pnb_publish_field(ctx, &f, PNB_BORROW), PNB_INVALID_ARGUMENT, ctx, "name is NULL", "NULL name");
+  f = good_field("T"); f.struct_size = 0;
+  expect(pnb_publish_field(ctx, &f, PNB_BORROW), PNB_INVALID_ARGUMENT, ctx, "pnb_field_desc.struct_size is 0",
+         "an uninitialised field struct_size");
   f = good_field("T"); f.count = NP - 1;
   expect(pnb_publish_field(ctx, &f, PNB_COPY), PNB_INVALID_ARGUMENT, ctx,
          "field 'T' has 11 values but the mesh has 12 points", "wrong value count");
@@ -298,7 +307,12 @@ int main(void) {
   {
     pnb_step_stats stats;
     memset(&stats, 0xff, sizeof stats);
+    stats.struct_size = 0;
+    expect(pnb_last_step(ctx, &stats), PNB_INVALID_ARGUMENT, ctx, "pnb_step_stats.struct_size is 0",
+           "last step into an uninitialised struct");
+    stats.struct_size = sizeof stats;
     expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step");
+    check(stats.struct_size == sizeof stats, "last step keeps the caller's struct_size", NULL);
     check(stats.cycle == 2 && stats.images == 2, "last step: cycle 2, two cameras", NULL);
     check(stats.total_ms >= stats.render_ms && stats.render_ms > 0, "last step: times", NULL);
     check(stats.light_ms == 0 && stats.light_residual == 0, "last step: no light volume, no light figures", NULL);

@@ -79,7 +79,7 @@ pnb_type float_type(vtkDataArray* a) { return a->GetDataType() == VTK_FLOAT ? PN
 
 struct UnstructuredGridAdaptor::Impl {
   vtkSmartPointer<vtkUnstructuredGrid> grid;
-  pnb_mesh_desc mesh{};
+  pnb_mesh_desc mesh PNB_MESH_DESC_INIT;
   std::vector<pnb_field_desc> fields;
   AdaptorReport report;
   UnstructuredGridAdaptor::CopyFilter copy_filter;
@@ -215,7 +215,8 @@ pnb_field_desc UnstructuredGridAdaptor::Impl::copy_field(vtkDataArray* a, pnb_as
   own_values.push_back(std::move(values));
   std::string why = filter ? "filtered to volume cells" : std::string(a->GetDataTypeAsString()) + " to float64";
   report.copied_fields.push_back(std::string(a->GetName()) + " (" + why + ")");
-  return {a->GetName(), association, own_values.back().data(), static_cast<std::int64_t>(count), nc, 0, PNB_FLOAT64};
+  return {sizeof(pnb_field_desc), a->GetName(), association, own_values.back().data(), static_cast<std::int64_t>(count), nc, 0,
+          PNB_FLOAT64};
 }
 
 void UnstructuredGridAdaptor::Impl::build_fields(vtkDataSetAttributes* data, pnb_association association) {
@@ -230,7 +231,7 @@ void UnstructuredGridAdaptor::Impl::build_fields(vtkDataSetAttributes* data, pnb
       continue;
     }
     if (!filter && is_packed_float(a)) {
-      fields.push_back({name, association, a->GetVoidPointer(0), a->GetNumberOfTuples(),
+      fields.push_back({sizeof(pnb_field_desc), name, association, a->GetVoidPointer(0), a->GetNumberOfTuples(),
                         a->GetNumberOfComponents(), 0, float_type(a)});
     } else if (!copy_filter || copy_filter(name)) {
       fields.push_back(copy_field(a, association, filter));

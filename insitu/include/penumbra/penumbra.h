@@ -10,7 +10,14 @@
  * Every call returns a status; on failure pnb_last_error(ctx) describes it. No call ever aborts
  * the host program or lets an exception escape. A context is not thread-safe: call it from one
  * thread at a time. Borrowed arrays (PNB_BORROW) must stay valid and unchanged until the next
- * pnb_execute returns; Penumbra copies what it keeps. */
+ * pnb_execute returns; Penumbra copies what it keeps.
+ *
+ * The structs passed in and out start with `struct_size`, the size of the struct as the caller
+ * was compiled: initialise them with PNB_MESH_DESC_INIT, PNB_FIELD_DESC_INIT and
+ * PNB_STEP_STATS_INIT (the Fortran types carry it as their default). Later versions add members
+ * at the end only, after the previous version's size; the library reads a caller's older, smaller struct with the added members at
+ * their defaults, so a binary built against this header keeps working with later libraries.
+ * Versions of the library, this ABI and the file formats: docs/versions.md. */
 #ifndef PENUMBRA_PENUMBRA_H
 #define PENUMBRA_PENUMBRA_H
 
@@ -19,6 +26,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The C ABI's version: bumped when a struct grows or a call is added. */
+#define PNB_ABI_VERSION 2
 
 typedef struct pnb_context_s* pnb_context;
 
@@ -49,6 +59,7 @@ typedef enum { PNB_POINT_FIELD = 0, PNB_CELL_FIELD = 1 } pnb_association;
  * topology_version: bump when points or connectivity change; an unchanged version makes
  *                   republishing free. */
 typedef struct {
+  uint32_t struct_size; /* sizeof(pnb_mesh_desc) as the caller was compiled (PNB_MESH_DESC_INIT) */
   const void* points;
   int64_t point_count;
   int64_t point_stride_bytes;
@@ -62,9 +73,13 @@ typedef struct {
   uint64_t topology_version;
 } pnb_mesh_desc;
 
+/* Every member at its default: no arrays, float64 points, int64 indices. */
+#define PNB_MESH_DESC_INIT {sizeof(pnb_mesh_desc), 0, 0, 0, PNB_FLOAT64, 0, 0, 0, PNB_INT64, 0, 0, 0}
+
 /* One field: count items of `components` values each, in type (PNB_FLOAT32/64), stride_bytes
  * apart (0 means packed). */
 typedef struct {
+  uint32_t struct_size; /* sizeof(pnb_field_desc) as the caller was compiled (PNB_FIELD_DESC_INIT) */
   const char* name;
   pnb_association association;
   const void* values;
@@ -73,6 +88,9 @@ typedef struct {
   int64_t stride_bytes;
   pnb_type type;
 } pnb_field_desc;
+
+/* Every member at its default: a packed point field of one float64 component, no values yet. */
+#define PNB_FIELD_DESC_INIT {sizeof(pnb_field_desc), 0, PNB_POINT_FIELD, 0, 0, 1, 0, PNB_FLOAT64}
 
 /* Creates a context from a JSON config: a file path, or JSON text starting with '{' (schema in
  * insitu/README.md). Opens the output database at once: PNB_INVALID_ARGUMENT for a bad config
@@ -89,11 +107,13 @@ pnb_status pnb_create(const char* config, pnb_context* out);
  * the output and store directories (non-empty without "resume", not writable, a resumed
  * data.csv's header) and whether a GPU can be opened. */
 pnb_status pnb_check_config(const char* config);
-/* Publishes (or republishes) the mesh: validates it (errors name the offending cell or point)
+/* Publishes (or republishes) the mesh: PNB_INVALID_ARGUMENT for a struct_size that is not of any
+ * version's pnb_mesh_desc (0: not initialised with PNB_MESH_DESC_INIT; larger than this
+ * library's: built against a later version). Validates it (errors name the offending cell or point)
  * and prepares it for rendering. Penumbra copies what it keeps, so the arrays may be freed after
  * the call whatever `own` says. Republishing the same topology_version returns at once. */
 pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own);
-/* Publishes one field for the next execute. Fields the config does not render are ignored
+/* Publishes one field for the next execute (struct_size checked as for the mesh). Fields the config does not render are ignored
  * (not read, not copied). PNB_BORROW fields are read during the next pnb_execute and then
  * forgotten; PNB_COPY fields are copied now and kept until republished or the topology changes.
  * PNB_INVALID_OPERATION before the first mesh. */
@@ -108,6 +128,7 @@ pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle);
  * solve of the last rendered field (lighting model "light-volume"; 0 otherwise): its time, its
  * remaining change (0 once converged) and whether it converged within the step's budget. */
 typedef struct {
+  uint32_t struct_size; /* sizeof(pnb_step_stats) as the caller was compiled (PNB_STEP_STATS_INIT) */
   int64_t cycle;
   int images;
   double render_ms;
@@ -116,7 +137,9 @@ typedef struct {
   double light_residual;
   int light_converged;
 } pnb_step_stats;
-/* Fills *out; PNB_INVALID_ARGUMENT for a NULL out. */
+#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0}
+/* Fills the members of *out that its struct_size holds; PNB_INVALID_ARGUMENT for a NULL out or
+ * a struct_size that is not of any version's struct. */
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);
 /* Finalizes: flushes pending work; the context stays valid only for pnb_destroy. */
 pnb_status pnb_finalize(pnb_context ctx);

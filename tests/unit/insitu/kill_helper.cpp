@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   auto mesh = penumbra::fixtures::block(penumbra::fixtures::BlockCells::tets, 6, 6, 6, {0, 0, 0}, {1, 1, 1});
-  pnb_mesh_desc m{mesh.xyz.data(), static_cast<int64_t>(mesh.point_count()), 0, PNB_FLOAT64,
+  pnb_mesh_desc m{sizeof(pnb_mesh_desc), mesh.xyz.data(), static_cast<int64_t>(mesh.point_count()), 0, PNB_FLOAT64,
                   mesh.connectivity.data(), static_cast<int64_t>(mesh.connectivity.size()), mesh.offsets.data(),
                   PNB_INT64, mesh.types.data(), static_cast<int64_t>(mesh.types.size()), 1};
   if (pnb_publish_mesh(ctx, &m, PNB_BORROW) != PNB_OK) {
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
     const auto values = penumbra::fixtures::sample(mesh, [t](double x, double y, double z) {
       return std::sin(6 * x + t) * std::cos(4 * y) + z;
     });
-    pnb_field_desc f{"T", PNB_POINT_FIELD, values.data(), static_cast<int64_t>(values.size()), 1, 0, PNB_FLOAT64};
+    pnb_field_desc f{sizeof(pnb_field_desc), "T", PNB_POINT_FIELD, values.data(), static_cast<int64_t>(values.size()), 1, 0, PNB_FLOAT64};
     pnb_field_desc f2 = f;
     f2.name = "T2";
     if (pnb_publish_field(ctx, &f, PNB_BORROW) != PNB_OK || pnb_publish_field(ctx, &f2, PNB_BORROW) != PNB_OK ||
