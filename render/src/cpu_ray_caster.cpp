@@ -101,6 +101,31 @@ struct FrameContext {
   double stop_transmittance;
 };
 
+// Where a walk began and the ray's composite then: with the composite where it ended, the run
+// it walked (RenderOptions::ray_runs).
+struct RunStart {
+  double depth = 0;
+  Composite before;
+};
+
+// Each pixel's runs, while a frame renders (flattened into RayRuns at its end).
+using PixelRuns = std::vector<std::vector<RayRun>>;
+
+// The run of a walk that began at `start` and left the mesh at `exit_depth` with `after`: what
+// it alone adds, premultiplied (front to back, after = before + T_before x run).
+void add_run(const RunStart& start, double exit_depth, const Composite& after, std::vector<RayRun>& runs) {
+  if (!(exit_depth > start.depth)) return;  // a graze along the boundary
+  const double t0 = start.before.transmittance;
+  RayRun r;
+  r.entry_depth = static_cast<float>(start.depth);
+  r.exit_depth = static_cast<float>(exit_depth);
+  if (t0 > 0) {
+    for (int c = 0; c < 3; ++c) r.rgba[c] = static_cast<float>((after.rgb[c] - start.before.rgb[c]) / t0);
+    r.rgba[3] = static_cast<float>(1.0 - after.transmittance / t0);
+  }
+  runs.push_back(r);
+}
+
 // One pixel's ray while it walks: its entries, the walk under way and its composite.
 struct RayJob {
   int x = 0, y = 0;
@@ -112,6 +137,7 @@ struct RayJob {
   WalkCursor cursor;
   Composite acc;
   WalkStats stats;
+  RunStart run;
 };
 
 // Rays a tile walks side by side. One walk step is a chain of dependent loads and arithmetic
@@ -193,14 +219,19 @@ struct CpuRayCaster::Impl {
   // Counts an ended walk as an entry unless it only grazed the boundary.
   void end_walk(const TfTable& tf, double stop_transmittance, WalkCursor& c, Composite& acc, WalkStats& stats) const;
   // Composites one ray: every entry, front to back, until the ray is opaque.
+  // `runs` (optional) receives the walks as runs.
   template <class Geometry>
   void trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                  const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries, Composite& acc,
-                 WalkStats& stats) const;
+                 WalkStats& stats, std::vector<RayRun>* runs = nullptr) const;
   // Renders the pixels of one tile in screen space, keeping kRaysInFlight rays walking side by
-  // side (see RayJob).
+  // side (see RayJob); `runs` (optional) receives each pixel's runs.
   template <bool kShaded>
-  void render_tile(const FrameContext& fc, int x0, int y0, int x1, int y1, RayJob* jobs, Image& image) const;
+  void render_tile(const FrameContext& fc, int x0, int y0, int x1, int y1, RayJob* jobs, Image& image,
+                   PixelRuns* runs) const;
+  // Renders a frame into `image` (sized), and each pixel's runs into `runs` when given.
+  void render_frame(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                    const RenderOptions& options, Image& image, PixelRuns* runs) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -457,12 +488,13 @@ template <bool kShaded, class Geometry>
 template <class Geometry>
 void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const TfTable& tf,
                                    const ShadeContext* shade, double stop_transmittance, std::vector<Entry>& entries,
-                                   Composite& acc, WalkStats& stats) const {
+                                   Composite& acc, WalkStats& stats, std::vector<RayRun>* runs) const {
   find_entries(f, geo, shade, entries);
   double done = -std::numeric_limits<double>::infinity();
   WalkCursor c;
   std::size_t next = 0;
   while (begin_next_walk(tf, entries, next, done, stats, c)) {
+    const RunStart run{c.t_in, acc};
     if (shade != nullptr)
       while (step<true>(f, geo, tf, shade, stop_transmittance, c, acc, stats)) {
       }
@@ -471,16 +503,22 @@ void CpuRayCaster::Impl::trace_ray(const RayFrame& f, const Geometry& geo, const
       }
     end_walk(tf, stop_transmittance, c, acc, stats);
     done = c.t_in;
+    if (runs) add_run(run, done, acc, *runs);
     if (acc.transmittance < stop_transmittance) break;
   }
 }
 
 template <bool kShaded>
 void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int x1, int y1, RayJob* jobs,
-                                     Image& image) const {
+                                     Image& image, PixelRuns* runs) const {
   const int width = x1 - x0, count = width * (y1 - y0);
   int next_pixel = 0;
-  auto next_walk = [&](RayJob& j) { return begin_next_walk(fc.tf, j.entries, j.next_entry, j.done, j.stats, j.cursor); };
+  // A walk begins: where, and the composite so far, for its run.
+  auto next_walk = [&](RayJob& j) {
+    if (!begin_next_walk(fc.tf, j.entries, j.next_entry, j.done, j.stats, j.cursor)) return false;
+    if (runs) j.run = RunStart{j.cursor.t_in, j.acc};
+    return true;
+  };
   auto finish = [&](const RayJob& j) { store_pixel(j.acc, image.pixel(j.x, j.y)); };
   // Fills a slot with the next pixel that has a walk to do (pixels without one are finished at
   // once); false when the tile has no pixel left.
@@ -524,6 +562,7 @@ void CpuRayCaster::Impl::render_tile(const FrameContext& fc, int x0, int y0, int
       if (step<kShaded>(j.frame, j.geo, fc.tf, fc.shade, fc.stop_transmittance, j.cursor, j.acc, j.stats)) continue;
       end_walk(fc.tf, fc.stop_transmittance, j.cursor, j.acc, j.stats);
       j.done = j.cursor.t_in;
+      if (runs) add_run(j.run, j.done, j.acc, (*runs)[static_cast<std::size_t>(j.y) * image.width + j.x]);
       if (j.acc.transmittance >= fc.stop_transmittance && next_walk(j)) continue;
       finish(j);
       live[s] = fill(j);
@@ -540,18 +579,40 @@ const TetMesh& CpuRayCaster::mesh() const { return *m_impl->mesh; }
 Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) const {
   detail::check_frame_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf, camera, options);
+  Image image(camera.width, camera.height);
+  m_impl->render_frame(scalars, tf, camera, options, image, nullptr);
+  return image;
+}
+
+void CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                          const RenderOptions& options, RenderOutput& out) {
+  detail::check_frame_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf, camera, options);
+  out.image = Image(camera.width, camera.height);
+  out.runs = {};
+  if (!options.ray_runs) return m_impl->render_frame(scalars, tf, camera, options, out.image, nullptr);
+  PixelRuns runs(static_cast<std::size_t>(camera.width) * camera.height);
+  m_impl->render_frame(scalars, tf, camera, options, out.image, &runs);
+  out.runs.offsets.reserve(runs.size() + 1);
+  out.runs.offsets.push_back(0);
+  for (const auto& pixel : runs) {
+    out.runs.runs.insert(out.runs.runs.end(), pixel.begin(), pixel.end());
+    out.runs.offsets.push_back(static_cast<std::uint32_t>(out.runs.runs.size()));
+  }
+}
+
+void CpuRayCaster::Impl::render_frame(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                                      const RenderOptions& options, Image& image, PixelRuns* runs) const {
   const double opacity = options.early_termination_opacity;
   const double stop_transmittance = opacity >= 1.0 ? 0.0 : 1.0 - opacity;
   const TfTable table(tf);
   const bool shaded = options.shading.model != LightingModel::none;
-  const ShadeContext shade = shaded ? detail::make_shade_context(m_impl->tets, m_impl->points, m_impl->point_ids.data(),
+  const ShadeContext shade = shaded ? detail::make_shade_context(tets, points, point_ids.data(),
                                                                  scalars.data(), options.shading)
                                     : ShadeContext{};
-  Image image(camera.width, camera.height);
   // With the whole mesh in front of the eye, projections are shared by all rays of the frame.
   const ScreenBasis basis = detail::screen_basis(camera);
   const std::vector<ScreenPoint> screen =
-      detail::project_to_screen(basis, m_impl->points, m_impl->point_ids.data(), scalars.data(), m_impl->mesh->bounds);
+      detail::project_to_screen(basis, points, point_ids.data(), scalars.data(), mesh->bounds);
   const Camera::Frame camera_frame = camera.frame();
   constexpr int tile = 16;
   const int tiles_x = (camera.width + tile - 1) / tile, tiles_y = (camera.height + tile - 1) / tile;
@@ -563,7 +624,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   constexpr int bin = 2;
   const int bins_x = (camera.width + bin - 1) / bin;
   const detail::ScreenBins bins =
-      screen.empty() ? detail::ScreenBins{} : detail::bin_boundary_faces(m_impl->triangles, screen, camera, bin);
+      screen.empty() ? detail::ScreenBins{} : detail::bin_boundary_faces(triangles, screen, camera, bin);
   const FrameContext fc{camera, camera_frame, screen.data(), basis, bins, bin, bins_x,
                         table, shaded ? &shade : nullptr, stop_transmittance};
   parallel_for(static_cast<std::size_t>(tiles_x) * tiles_y, 4, [&](std::size_t begin, std::size_t end) {
@@ -574,9 +635,9 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
       const int x1 = std::min(x0 + tile, camera.width), y1 = std::min(y0 + tile, camera.height);
       if (!screen.empty()) {
         if (shaded)
-          m_impl->render_tile<true>(fc, x0, y0, x1, y1, jobs, image);
+          render_tile<true>(fc, x0, y0, x1, y1, jobs, image, runs);
         else
-          m_impl->render_tile<false>(fc, x0, y0, x1, y1, jobs, image);
+          render_tile<false>(fc, x0, y0, x1, y1, jobs, image, runs);
         continue;
       }
       for (int y = y0; y < y1; ++y)
@@ -585,13 +646,13 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
           Composite acc;
           WalkStats stats;
           const RayFrame frame(ray.origin, ray.direction);
-          const RayGeometry geo{frame, m_impl->points.data(), m_impl->point_ids.data(), scalars.data()};
-          m_impl->trace_ray(frame, geo, table, shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats);
+          const RayGeometry geo{frame, points.data(), point_ids.data(), scalars.data()};
+          trace_ray(frame, geo, table, shaded ? &shade : nullptr, stop_transmittance, entries, acc, stats,
+                    runs ? &(*runs)[static_cast<std::size_t>(y) * camera.width + x] : nullptr);
           store_pixel(acc, image.pixel(x, y));
         }
     }
   });
-  return image;
 }
 
 RayTrace CpuRayCaster::trace(const std::vector<float>& scalars, const TransferFunction& tf, const Ray& ray) const {

@@ -270,6 +270,13 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
 
 GpuMemoryStats GpuRayCaster::memory() const { return m_impl->stats; }
 std::size_t GpuRayCaster::last_scalar_upload_bytes() const { return m_impl->last_upload; }
+void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                          const RenderOptions& options, RenderOutput& out) {
+  require(!options.ray_runs, "GpuRayCaster::render: ray runs (RenderOptions::ray_runs) are computed by the CPU renderer only");
+  out.image = render(scalars, tf, camera, options);
+  out.runs = {};
+}
+
 const TetMesh& GpuRayCaster::mesh() const { return *m_impl->mesh; }
 const GpuDevice& GpuRayCaster::device() const { return *m_impl->device; }
 

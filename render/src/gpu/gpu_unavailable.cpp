@@ -31,6 +31,10 @@ Image GpuRayCaster::render(const std::vector<float>&, const TransferFunction&, c
 }
 GpuMemoryStats GpuRayCaster::memory() const { unavailable(); }
 std::size_t GpuRayCaster::last_scalar_upload_bytes() const { unavailable(); }
+void GpuRayCaster::render(const std::vector<float>&, const TransferFunction&, const Camera&, const RenderOptions&,
+                          RenderOutput&) {
+  unavailable();
+}
 const TetMesh& GpuRayCaster::mesh() const { unavailable(); }
 const GpuDevice& GpuRayCaster::device() const { unavailable(); }
 

@@ -6,19 +6,12 @@
 
 #include "penumbra/render/camera.h"
 #include "penumbra/render/image.h"
+#include "penumbra/render/renderer.h"
 #include "penumbra/render/shading.h"
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
 namespace penumbra::render {
-
-/// Options shared by the renderers.
-struct RenderOptions {
-  /// Rays stop once accumulated opacity exceeds this (1 disables early termination).
-  double early_termination_opacity = 0.999;
-  /// Lighting of the emitted colour (emission only by default).
-  Shading shading;
-};
 
 /// Per-ray result, for tests and diagnostics.
 struct RayTrace {
@@ -32,7 +25,7 @@ struct RayTrace {
 /// Multi-threaded CPU ray caster for emission-absorption through a TetMesh. Builds its
 /// acceleration structures (BVH over boundary faces) once per mesh; the mesh must outlive it.
 /// render() may be called concurrently from several threads.
-class CpuRayCaster {
+class CpuRayCaster final : public Renderer {
 public:
   explicit CpuRayCaster(std::shared_ptr<const TetMesh> mesh);
   ~CpuRayCaster();
@@ -42,10 +35,13 @@ public:
   /// Renders per-point `scalars` (one per mesh point; NaN = no data) through `tf`.
   Image render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                const RenderOptions& options = {}) const;
+  void render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+              const RenderOptions& options, RenderOutput& out) override;
   /// Traces one ray (origin + t*unit direction, t >= 0), no early termination.
   RayTrace trace(const std::vector<float>& scalars, const TransferFunction& tf, const Ray& ray) const;
 
-  const TetMesh& mesh() const;
+  const TetMesh& mesh() const override;
+  const char* backend() const override { return "cpu"; }
 
 private:
   struct Impl;

@@ -71,7 +71,7 @@ struct GpuMemoryStats {
 /// integral and early termination, in float32 instead of float64. The mesh is uploaded once;
 /// render() uploads only the blocks of field values that changed since the previous call.
 /// render() may be called from any thread; calls on one device are serialised.
-class GpuRayCaster {
+class GpuRayCaster final : public Renderer {
 public:
   /// Uploads `mesh`. Throws Error(out_of_memory) naming the sizes when the mesh does not fit the
   /// device's storage-buffer limits, its free memory, or options().memory_limit_bytes.
@@ -83,11 +83,16 @@ public:
   /// As CpuRayCaster::render.
   Image render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                const RenderOptions& options = {});
+  /// Ray runs (RenderOptions::ray_runs) are not computed on the GPU yet: asking for them throws
+  /// Error(invalid_argument); the CPU renderer computes them.
+  void render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+              const RenderOptions& options, RenderOutput& out) override;
 
   GpuMemoryStats memory() const;
   /// Field bytes sent to the device by the last render() (0 when the values were unchanged).
   std::size_t last_scalar_upload_bytes() const;
-  const TetMesh& mesh() const;
+  const TetMesh& mesh() const override;
+  const char* backend() const override { return "gpu"; }
   const GpuDevice& device() const;
 
 private:

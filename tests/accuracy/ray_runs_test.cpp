@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// tests/accuracy/ray_runs_test.cpp -- a render's runs inside the mesh (RenderOptions::ray_runs):
+// where each stretch of a ray enters and leaves, and what it adds; composited, they give the pixel.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+
+#include "penumbra/core/error.h"
+#include "penumbra/render/gpu_ray_caster.h"
+#include "penumbra/render/renderer.h"
+#include "scenes.h"
+
+namespace penumbra {
+namespace {
+
+using render::RayRun;
+
+// The hole block: the hole spans 1/3 < x, y < 2/3 through all z.
+std::shared_ptr<const render::TetMesh> hole_block() {
+  static const auto mesh = test::prepare(fixtures::tet_block_with_hole(6));
+  return mesh;
+}
+
+/// Pixel (x, y)'s runs composited front to back, in double: premultiplied RGB and alpha.
+std::array<double, 4> composite(const render::RayRuns& runs, std::size_t pixel) {
+  std::array<double, 4> out{0, 0, 0, 0};
+  double transmittance = 1;
+  for (std::uint32_t i = runs.offsets[pixel]; i < runs.offsets[pixel + 1]; ++i) {
+    const RayRun& r = runs.runs[i];
+    for (int c = 0; c < 3; ++c) out[c] += transmittance * r.rgba[c];
+    transmittance *= 1 - r.rgba[3];
+  }
+  out[3] = 1 - transmittance;
+  return out;
+}
+
+// The centre pixel of an odd-sized image looks exactly along the view axis: along +x through
+// the hole's middle, the ray is inside on [0, 1/3] and [2/3, 1], at depths 1 + x from the eye at
+// x = -1; each run of a homogeneous medium of extinction 1.5 has opacity 1 - exp(-1.5 / 3).
+TEST(RayRuns, ARayAcrossTheHoleHasTwoRunsAtTheFacesDepths) {
+  render::CpuRayCaster caster(hole_block());
+  const auto camera = render::Camera::look_at({-1, 0.5, 0.5}, {2, 0.5, 0.5}, {0, 0, 1}, 20, 31, 31);
+  const std::vector<float> scalars(hole_block()->points.size(), 0.0f);
+  render::RenderOptions options;
+  options.ray_runs = true;
+  render::RenderOutput out;
+  caster.render(scalars, test::constant_tf(1.5), camera, options, out);
+  const std::size_t centre = 15 * 31 + 15;
+  ASSERT_EQ(out.runs.offsets.size(), 31u * 31u + 1);
+  ASSERT_EQ(out.runs.offsets[centre + 1] - out.runs.offsets[centre], 2u);
+  const RayRun* r = &out.runs.runs[out.runs.offsets[centre]];
+  const double depths[4] = {1.0, 4.0 / 3.0, 5.0 / 3.0, 2.0};
+  const double alpha = 1 - std::exp(-0.5);
+  for (int i = 0; i < 2; ++i) {
+    // float32 depths: 1.2e-7 relative.
+    EXPECT_NEAR(r[i].entry_depth, depths[2 * i], 3e-7) << i;
+    EXPECT_NEAR(r[i].exit_depth, depths[2 * i + 1], 3e-7) << i;
+    // The closed-form segment integral in double, then float32.
+    EXPECT_NEAR(r[i].rgba[3], alpha, 1e-6) << i;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(r[i].rgba[c], alpha, 1e-6) << i;  // white emission
+  }
+}
+
+// Composited front to back, every pixel's runs give its pixel (to float32's rounding of each
+// run), with a varying field, Phong shading, pixels that miss the mesh and rays that re-enter.
+TEST(RayRuns, CompositedRunsGiveTheImage) {
+  const auto mesh = hole_block();
+  render::CpuRayCaster caster(mesh);
+  std::vector<float> scalars(mesh->points.size());
+  for (std::size_t i = 0; i < scalars.size(); ++i)
+    scalars[i] = static_cast<float>(0.5 + 0.5 * std::sin(7 * mesh->points[i].x + 3 * mesh->points[i].z));
+  render::TransferFunction tf;
+  tf.colors = {{0.0, 0.1, 0.3, 0.9}, {1.0, 1.0, 0.6, 0.1}};
+  tf.opacities = {{0.0, 0.5}, {1.0, 6.0}};
+  for (const bool phong : {false, true}) {
+    render::RenderOptions options;
+    options.ray_runs = true;
+    if (phong) options.shading.model = render::LightingModel::phong;
+    const auto camera = render::Camera::orbit(mesh->bounds, 30, 10, 30, 48, 40);
+    render::RenderOutput out;
+    caster.render(scalars, tf, camera, options, out);
+    std::size_t several = 0;
+    for (std::size_t p = 0; p < std::size_t(48 * 40); ++p) {
+      const auto c = composite(out.runs, p);
+      const float* px = &out.image.rgba[4 * p];
+      for (int k = 0; k < 4; ++k) ASSERT_NEAR(c[k], px[k], 2e-6) << "pixel " << p << " channel " << k;
+      several += out.runs.offsets[p + 1] - out.runs.offsets[p] > 1;
+      for (std::uint32_t i = out.runs.offsets[p]; i + 1 < out.runs.offsets[p + 1]; ++i)
+        ASSERT_LE(out.runs.runs[i].exit_depth, out.runs.runs[i + 1].entry_depth) << "front to back";
+    }
+    EXPECT_GT(several, 20u) << "the view across the hole re-enters the mesh";
+  }
+}
+
+// Asking for nothing costs nothing and changes nothing: the same image, bit for bit, with or
+// without runs, and no runs unless asked.
+TEST(RayRuns, TheImageIsTheSameWithOrWithoutRuns) {
+  const auto mesh = hole_block();
+  render::CpuRayCaster caster(mesh);
+  std::vector<float> scalars(mesh->points.size());
+  for (std::size_t i = 0; i < scalars.size(); ++i) scalars[i] = static_cast<float>(mesh->points[i].y);
+  const auto tf = test::constant_tf(2.0);
+  const auto camera = render::Camera::orbit(mesh->bounds, -50, 25, 30, 40, 32);
+  const render::Image plain = caster.render(scalars, tf, camera);
+  render::RenderOutput without, with;
+  render::RenderOptions options;
+  caster.render(scalars, tf, camera, options, without);
+  options.ray_runs = true;
+  caster.render(scalars, tf, camera, options, with);
+  EXPECT_TRUE(without.runs.empty());
+  EXPECT_FALSE(with.runs.empty());
+  EXPECT_EQ(0, std::memcmp(plain.rgba.data(), without.image.rgba.data(), plain.rgba.size() * 4));
+  EXPECT_EQ(0, std::memcmp(plain.rgba.data(), with.image.rgba.data(), plain.rgba.size() * 4));
+}
+
+// The GPU renderer says that it does not compute runs rather than returning none.
+TEST(RayRuns, TheGpuRendererRefusesToComputeRuns) {
+  if (!render::gpu_backend_compiled()) GTEST_SKIP() << "built without the GPU backend";
+  std::shared_ptr<render::GpuDevice> device;
+  try {
+    device = render::GpuDevice::open();
+  } catch (const Error& e) {
+    GTEST_SKIP() << e.what();
+  }
+  render::GpuRayCaster caster(device, hole_block());
+  render::Renderer& renderer = caster;
+  render::RenderOptions options;
+  options.ray_runs = true;
+  render::RenderOutput out;
+  const std::vector<float> scalars(hole_block()->points.size(), 0.0f);
+  try {
+    renderer.render(scalars, test::constant_tf(1), render::Camera::orbit(hole_block()->bounds, 0, 0, 30, 8, 8), options, out);
+    ADD_FAILURE() << "expected a refusal";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    EXPECT_NE(std::string(e.what()).find("CPU renderer only"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace penumbra
