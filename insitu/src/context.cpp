@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// insitu/src/context.cpp -- per-step pipeline: fields -> scalars -> images -> database
+// insitu/src/context.cpp -- the run: mesh and fields in, each step through its stages (step_stages.h)
 #include "context.h"
 
 #include <algorithm>
@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "field_store.h"
+#include "image_writer.h"
 #include "occlusion_lighting.h"
 #include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
@@ -32,14 +33,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::vector<std::string> database_parameters(const Config& c) {
-  std::vector<std::string> p{"time", "phi", "theta"};
-  if (!c.look_at.empty()) p.push_back("camera");
-  p.push_back("field");
-  if (c.lighting) p.push_back("lighting");
-  return p;
-}
 
 /// The `lighting` column's value.
 std::string lighting_label(const LightingConfig& l) {
@@ -179,8 +172,8 @@ struct Context::CameraEntry {
 
 struct Context::PreparedMesh {
   std::shared_ptr<const render::TetMesh> tets;
-  std::unique_ptr<render::CpuRayCaster> caster;      ///< null when the GPU renders
-  std::unique_ptr<render::GpuRayCaster> gpu_caster;  ///< null when the CPU renders
+  std::unique_ptr<render::Renderer> renderer;  ///< the config's backend, or the CPU where "auto" fell back
+  bool on_gpu = false;                         ///< renderer is the GPU's: lighting is solved there too
   std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
   std::vector<std::uint8_t> cell_types;
   MeshView view;  ///< over the owned copies (points from the prepared mesh)
@@ -202,8 +195,7 @@ Context::Context(Config config)
       m_config.lighting->occlusion.space == OcclusionSpace::image)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
-  m_database = std::make_unique<CinemaDatabase>(m_config.output_directory, database_parameters(m_config),
-                                                m_config.if_exists);
+  m_writer = std::make_unique<ImageWriter>(m_config);
   if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store);
 }
 
@@ -242,15 +234,8 @@ void Context::publish_mesh(const MeshView& mesh) {
                   p->tets->tet_volume, p->tets->enclosed_volume);
     log_line(text);
   }
-  if (m_config.backend == Backend::gpu) {
-    try {
-      p->gpu_caster = std::make_unique<render::GpuRayCaster>(process_gpu_device(false), p->tets);
-    } catch (const Error& e) {
-      if (!m_cpu_fallback || e.code() != ErrorCode::out_of_memory) throw;
-      log_line(std::string("backend \"auto\": ") + e.what() + "; rendering this mesh on the CPU");
-    }
-  }
-  if (!p->gpu_caster) p->caster = std::make_unique<render::CpuRayCaster>(p->tets);
+  p->renderer = make_renderer(p->tets);
+  p->on_gpu = std::string(p->renderer->backend()) == "gpu";
 
   const std::size_t isz = scalar_size(mesh.connectivity.type);
   const auto* cb = static_cast<const std::byte*>(mesh.connectivity.data);
@@ -355,76 +340,116 @@ const Context::StepField& Context::field_values(std::size_t index, std::int64_t 
   return step;
 }
 
-void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
-                           std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
-  const FieldConfig& f = m_config.fields[index];
-  const StepField& step = field_values(index, cycle, values);
-  const std::vector<float>& scalars = step.normalized;
-  const render::TransferFunction tf = resolve_transfer_function(f, step.lo, step.hi, m_mesh->tets->bounds.diagonal());
-  render::RenderOptions options;
-  if (lit(m_config)) {
-    const LightingConfig& l = *m_config.lighting;
-    const std::vector<float>* light_rgb = nullptr;
-    if (l.occlusion_model) {
-      auto& occ = m_mesh->occlusions;
-      if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
-      if (!occ[index])  // cones traced on the GPU when it renders
-        occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, l.occlusion, l.lights,
-                                                         m_mesh->gpu_caster ? process_gpu_device(false) : nullptr);
-      const auto t0 = Clock::now();
-      occ[index]->set_field(scalars, tf);
-      m_last_step.light_ms += ms_since(t0);
-    } else if (l.model == render::LightingModel::light_volume) {
-      auto& volumes = m_mesh->light_volumes;
-      if (volumes.size() < m_config.fields.size()) volumes.resize(m_config.fields.size());
-      auto& lv = volumes[index];
-      if (!lv) {
-        render::LightVolumeOptions lo;
-        lo.level0_resolution = l.level0_resolution;
-        lo.sigma_a = l.absorption;
-        lo.sigma_s = l.scattering;
-        // With the gpu backend the light is solved on the same device as the rendering.
-        if (m_mesh->gpu_caster) lo.device = process_gpu_device(false);
-        lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
-        lv->set_lights(l.lights);
-      }
-      const auto t0 = Clock::now();
-      lv->set_field(scalars, tf);
-      m_last_step.light = lv->update(l.budget);
-      m_last_step.light_ms += ms_since(t0);
-      light_rgb = &lv->light_rgb();
+std::unique_ptr<render::Renderer> Context::make_renderer(const std::shared_ptr<const render::TetMesh>& tets) const {
+  if (m_config.backend == Backend::gpu) {
+    try {
+      return std::make_unique<render::GpuRayCaster>(process_gpu_device(false), tets);
+    } catch (const Error& e) {
+      if (!m_cpu_fallback || e.code() != ErrorCode::out_of_memory) throw;
+      log_line(std::string("backend \"auto\": ") + e.what() + "; rendering this mesh on the CPU");
     }
-    options.shading = shading_of(l, light_rgb);
   }
-  const bool with_camera_column = !m_config.look_at.empty();
-  char cycle_text[32];
-  std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
-  for (const CameraEntry& cam : m_mesh->cameras) {
-    if (lit(m_config) && m_config.lighting->occlusion_model) {
-      // Occlusion looks towards the viewer: one light field per camera (or, in image space, a
-      // light evaluated along every ray).
+  return std::make_unique<render::CpuRayCaster>(tets);
+}
+
+OcclusionLighting& Context::occlusion_of(std::size_t index) {
+  auto& occ = m_mesh->occlusions;
+  if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
+  if (!occ[index])  // cones traced on the GPU when it renders
+    occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, m_config.lighting->occlusion, m_config.lighting->lights,
+                                                     m_mesh->on_gpu ? process_gpu_device(false) : nullptr);
+  return *occ[index];
+}
+
+render::LightVolume& Context::light_volume_of(std::size_t index) {
+  auto& volumes = m_mesh->light_volumes;
+  if (volumes.size() < m_config.fields.size()) volumes.resize(m_config.fields.size());
+  auto& lv = volumes[index];
+  if (!lv) {
+    const LightingConfig& l = *m_config.lighting;
+    render::LightVolumeOptions lo;
+    lo.level0_resolution = l.level0_resolution;
+    lo.sigma_a = l.absorption;
+    lo.sigma_s = l.scattering;
+    // With the gpu backend the light is solved on the same device as the rendering.
+    if (m_mesh->on_gpu) lo.device = process_gpu_device(false);
+    lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
+    lv->set_lights(l.lights);
+  }
+  return *lv;
+}
+
+render::RenderOptions Context::prepare_lighting(std::size_t index, const StepField& step, const render::TransferFunction& tf) {
+  render::RenderOptions options;
+  if (!lit(m_config)) return options;
+  const LightingConfig& l = *m_config.lighting;
+  const std::vector<float>* light_rgb = nullptr;
+  const auto t0 = Clock::now();
+  if (l.occlusion_model) {
+    occlusion_of(index).set_field(step.normalized, tf);
+  } else if (l.model == render::LightingModel::light_volume) {
+    render::LightVolume& lv = light_volume_of(index);
+    lv.set_field(step.normalized, tf);
+    m_last_step.light = lv.update(l.budget);
+    light_rgb = &lv.light_rgb();
+  }
+  m_last_step.light_ms += ms_since(t0);
+  options.shading = shading_of(l, light_rgb);
+  return options;
+}
+
+std::vector<RenderedView> Context::render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
+                                                render::RenderOptions options, double& render_ms) {
+  const bool occlusion = lit(m_config) && m_config.lighting->occlusion_model;
+  std::vector<RenderedView> views;
+  for (std::size_t c = 0; c < m_mesh->cameras.size(); ++c) {
+    const render::Camera& camera = m_mesh->cameras[c].camera;
+    // Occlusion looks towards the viewer: one light field per camera (or, in image space, a
+    // light evaluated along every ray).
+    if (occlusion) {
       OcclusionLighting& occ = *m_mesh->occlusions[index];
       if (m_config.lighting->occlusion.space == OcclusionSpace::image) {
-        options.shading.light_at = occ.light_at(cam.camera.eye);
+        options.shading.light_at = occ.light_at(camera.eye);
       } else {
         const auto t_occ = Clock::now();
-        options.shading.light_rgb = &occ.light_rgb(cam.camera.eye);
+        options.shading.light_rgb = &occ.light_rgb(camera.eye);
         m_last_step.light_ms += ms_since(t_occ);
       }
     }
+    RenderedView& view = views.emplace_back();
+    view.field = index;
+    view.camera = c;
     const auto t0 = Clock::now();
-    const render::Image image = m_mesh->gpu_caster ? m_mesh->gpu_caster->render(scalars, tf, cam.camera, options)
-                                                   : m_mesh->caster->render(scalars, tf, cam.camera, options);
+    m_mesh->renderer->render(step.normalized, tf, camera, options, view.output);
     render_ms += ms_since(t0);
-    const std::string rel = m_database->new_image_path(m_field_labels[index], cycle_text + cam.stem);
-    render::write_png(m_database->path_of(rel), render::to_rgb8(image, m_config.background), image.width, image.height);
-    CinemaDatabase::Row row;
-    row.values = {format_number(time), cam.phi, cam.theta};
-    if (with_camera_column) row.values.push_back(cam.name);
-    row.values.push_back(m_field_labels[index]);
-    if (m_config.lighting) row.values.push_back(lighting_label(*m_config.lighting));
-    row.file = rel;
-    rows.push_back(std::move(row));
+  }
+  return views;
+}
+
+ImageLabels Context::labels_of(const ComposedImage& image, double time, std::int64_t cycle) const {
+  const CameraEntry& cam = m_mesh->cameras[image.camera];
+  char cycle_text[32];
+  std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
+  ImageLabels l;
+  l.time = format_number(time);
+  l.phi = cam.phi;
+  l.theta = cam.theta;
+  l.camera = cam.name;
+  l.field = m_field_labels[image.field];
+  if (m_config.lighting) l.lighting = lighting_label(*m_config.lighting);
+  l.stem = cycle_text + cam.stem;
+  return l;
+}
+
+void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
+                           std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
+  const StepField& step = field_values(index, cycle, values);  // gather
+  const FieldConfig& f = m_config.fields[index];
+  const render::TransferFunction tf = resolve_transfer_function(f, step.lo, step.hi, m_mesh->tets->bounds.diagonal());
+  const render::RenderOptions options = prepare_lighting(index, step, tf);
+  for (RenderedView& view : render_views(index, step, tf, options, render_ms)) {
+    const ComposedImage image = composite_view(std::move(view), m_config.background);
+    rows.push_back(m_writer->write(image, labels_of(image, time, cycle)));
   }
 }
 
@@ -459,7 +484,7 @@ bool Context::execute(double time, std::int64_t cycle) {
     }
   }
   // Only images that were completely written are listed.
-  if (!rows.empty()) m_database->commit(rows);
+  m_writer->commit(rows);
   m_last_step.cycle = cycle;
   m_last_step.images = static_cast<int>(rows.size());
   m_last_step.render_ms = render_ms;

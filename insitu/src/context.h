@@ -10,20 +10,19 @@
 
 #include "cinema_database.h"
 #include "config.h"
+#include "image_writer.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/mesh_view.h"
 #include "penumbra/render/light_volume.h"
+#include "penumbra/render/renderer.h"
+#include "step_stages.h"
 #include "trigger.h"
-
-namespace penumbra::render {
-struct TetMesh;
-class CpuRayCaster;
-}  // namespace penumbra::render
 
 namespace penumbra::insitu {
 
 class FieldStore;
+class OcclusionLighting;
 
 /// What the last rendering step did, for diagnostics and examples.
 struct StepStats {
@@ -108,6 +107,21 @@ private:
   /// Point values of config field `index` this step; throws Error(invalid_operation) when the
   /// field was not published.
   const StepField& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
+  /// The renderer of a newly published mesh: the config's backend (the CPU where "auto" finds
+  /// that the GPU cannot hold the mesh).
+  std::unique_ptr<render::Renderer> make_renderer(const std::shared_ptr<const render::TetMesh>& tets) const;
+  /// Field `index`'s lighting state, made at its first step and kept across steps.
+  OcclusionLighting& occlusion_of(std::size_t index);
+  render::LightVolume& light_volume_of(std::size_t index);
+  /// Prepare stage: the field's lighting for this step (light volume updated within its budget,
+  /// occlusion volume set), as the options every camera renders with.
+  render::RenderOptions prepare_lighting(std::size_t index, const StepField& step, const render::TransferFunction& tf);
+  /// Render stage: the field from every camera.
+  std::vector<RenderedView> render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
+                                         render::RenderOptions options, double& render_ms);
+  /// The database values of a composed image of this step.
+  ImageLabels labels_of(const ComposedImage& image, double time, std::int64_t cycle) const;
+  /// One field through the stages after gathering: prepare, render, composite, write.
   void render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                     std::vector<CinemaDatabase::Row>& rows, double& render_ms);
   void drop_borrowed_fields();
@@ -115,7 +129,7 @@ private:
 
   Config m_config;
   Trigger m_trigger;
-  std::unique_ptr<CinemaDatabase> m_database;
+  std::unique_ptr<ImageWriter> m_writer;  ///< the write stage; opened with the context
   std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
   bool m_cpu_fallback = false;           ///< "auto": a mesh the GPU cannot hold renders on the CPU
   std::unique_ptr<PreparedMesh> m_mesh;
