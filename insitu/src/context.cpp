@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "field_store.h"
+#include "view_cameras.h"
 #include "image_writer.h"
 #include "occlusion_lighting.h"
 #include "penumbra/core/elapsed.h"
@@ -31,8 +32,6 @@ namespace penumbra::insitu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// The `lighting` column's value.
 std::string lighting_label(const LightingConfig& l) {
@@ -164,12 +163,6 @@ std::string format_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-struct Context::CameraEntry {
-  render::Camera camera;
-  std::string phi, theta, name;  ///< database values
-  std::string stem;              ///< image file name stem without the cycle
-};
-
 struct Context::PreparedMesh {
   std::shared_ptr<const render::TetMesh> tets;
   std::unique_ptr<render::Renderer> renderer;  ///< the config's backend, or the CPU where "auto" fell back
@@ -177,7 +170,7 @@ struct Context::PreparedMesh {
   std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
   std::vector<std::uint8_t> cell_types;
   MeshView view;  ///< over the owned copies (points from the prepared mesh)
-  std::vector<CameraEntry> cameras;
+  std::vector<ViewCamera> cameras;
   /// Per config field entry, its light volume (model light-volume), made at the first step and
   /// kept across steps so that each step's light starts from the previous one.
   std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
@@ -252,25 +245,7 @@ void Context::publish_mesh(const MeshView& mesh) {
   p->view.offsets.data = p->offsets.empty() ? nullptr : p->offsets.data();
   p->view.cell_types = p->cell_types.data();
 
-  const Bounds& b = p->tets->bounds;
-  if (m_config.orbit)
-    for (double theta : m_config.orbit->theta)
-      for (double phi : m_config.orbit->phi) {
-        CameraEntry e{render::Camera::orbit(b, phi, theta, m_config.orbit->fov_y_deg, m_config.width, m_config.height),
-                      format_number(phi), format_number(theta), "orbit", ""};
-        e.stem = "phi" + e.phi + "_theta" + e.theta;
-        p->cameras.push_back(std::move(e));
-      }
-  for (const auto& c : m_config.look_at) {
-    // phi/theta of the viewing direction as seen from the target, so look_at rows sort
-    // sensibly beside orbit rows in Cinema viewers.
-    const Vec3d d = normalize(c.eye - c.target);
-    CameraEntry e{render::Camera::look_at(c.eye, c.target, c.up, c.fov_y_deg, m_config.width, m_config.height),
-                  format_number(std::round(std::atan2(d.y, d.x) * 180 / kPi * 100) / 100),
-                  format_number(std::round(std::asin(std::clamp(d.z, -1.0, 1.0)) * 180 / kPi * 100) / 100), c.name,
-                  c.name};
-    p->cameras.push_back(std::move(e));
-  }
+  p->cameras = view_cameras(m_config, p->tets->bounds);
   m_mesh = std::move(p);
   ++m_preparations;
   if (m_store) m_store->begin_segment(m_mesh->view);
@@ -427,7 +402,7 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
 }
 
 ImageLabels Context::labels_of(const ComposedImage& image, double time, std::int64_t cycle) const {
-  const CameraEntry& cam = m_mesh->cameras[image.camera];
+  const ViewCamera& cam = m_mesh->cameras[image.camera];
   char cycle_text[32];
   std::snprintf(cycle_text, sizeof cycle_text, "c%06lld_", static_cast<long long>(cycle));
   ImageLabels l;

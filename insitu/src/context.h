@@ -83,7 +83,6 @@ private:
     FieldView view;
     std::vector<std::byte> owned;  ///< packed copy when published with copy = true
   };
-  struct CameraEntry;
 
   /// Errors of one step's fields, gathered so that a failing field costs the others nothing.
   struct StepFailures {
