@@ -222,18 +222,12 @@ ValueMap Pager::decode_stored(std::uint64_t step, float* out) {
     load_waiting = m_request != kNone;
     load_running = m_loading != kNone;
   }
-  // While the next page's load waits for its thread to run, give up the core once per step:
-  // played back as fast as it decodes beside another busy process, smooth at 1e-3 (two pages,
-  // 3.4 ms of playback each, 0.8 ms to load one) found its second page not yet begun in 25 of 120
-  // playbacks, against 1 in 120 with the yield (and no change in playback time without the other
-  // process).
+  // While the next page's load waits for its thread to run, give up the core once per step: on a
+  // busy machine playback that decodes as fast as it can would otherwise keep the loader from
+  // starting before playback reaches its page (docs/pager.md, "Sharing two cores with the load").
   if (load_waiting) std::this_thread::yield();
-  // And while it runs, decode on this thread alone, leaving the other cores to it. Decoding on
-  // both of two cores, the load of a compressed page took 2-3 times its time alone (shock-
-  // nonuniform at 1e-3: 2.1-3.3 ms against 0.9, beside 2.9 ms of playback per page), and the
-  // next page was still loading when playback reached it in 12 of 18 playbacks of that field's
-  // three lines; decoding alone meanwhile, in none of 90 playbacks of five fields, at the same
-  // playback speed.
+  // And while it runs, decode on this thread alone, leaving the other cores to it: a load undoes
+  // a zstd frame, and competing with a decode on every core it takes several times its time alone.
   std::optional<SerialScope> serial;
   if (load_running) serial.emplace();
   m_cursor.decode(data, std::uint32_t(step - data->first_step), out);

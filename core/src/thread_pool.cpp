@@ -22,14 +22,14 @@ namespace penumbra {
 namespace {
 
 // Set in the child of a fork (pthread_atfork, registered with the pool): the child has none of the
-// parent's workers. A flag rather than comparing getpid() per call, which is a system call (about
-// 1 us on a virtual machine with page-table isolation) in every parallel_for. A child made by a
+// parent's workers. A flag rather than comparing getpid() per call, which would put a system
+// call in every parallel_for. A child made by a
 // raw clone() runs no fork handlers and is not detected: it would find the pool busy or wait on
 // workers it does not have.
 std::atomic<bool> g_forked_child{false};
 
-// Threads kept between calls: starting a thread costs about 40 us, which a one-step decode of
-// 100K vertices (about 250 us) or a light-volume piece of a frame budget cannot absorb. One job
+// Threads kept between calls: starting a thread costs a good part of what a one-step decode or a
+// light-volume piece of a frame budget takes (docs/pager.md, "The thread pool"). One job
 // at a time; a call that finds the pool busy (another thread's job, or a parallel_for inside a
 // body) starts its own threads as before, so nothing waits on the pool and nesting cannot
 // deadlock.
@@ -86,11 +86,10 @@ private:
     }
   }
 
-  // Waking a thread blocked on a condition variable took about 65 us here (a virtual machine's
-  // futex), against jobs of a few hundred: a light-volume pass runs one job per slab of
-  // vertices, hundreds per pass, and lost a fifth of its second core to the wake-ups. So a
-  // worker that has just finished, and a caller waiting for its helpers, first poll for up to
-  // kSpin before they block: jobs that follow each other closely then start at once.
+  // Waking a thread blocked on a condition variable can take a sizeable part of a short job (a
+  // light-volume pass runs one job per slab of vertices, hundreds per pass). So a worker that has
+  // just finished, and a caller waiting for its helpers, first poll for up to kSpin before they
+  // block: jobs that follow each other closely then start at once.
   static constexpr auto kSpin = std::chrono::microseconds(100);
   template <class Pending>
   static void spin_while(const Pending& pending) {
@@ -140,8 +139,8 @@ unsigned worker_count() {
     const int n = std::atoi(env);
     if (n > 0) return static_cast<unsigned>(n);
   }
-  // Read once: glibc counts the online CPUs from /sys at every call (open, read, close: 6 us on
-  // a virtual machine with page-table isolation), and every parallel_for asks.
+  // Read once: glibc counts the online CPUs from /sys at every call (open, read, close), and
+  // every parallel_for asks.
   static const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
   return hardware;
 }

@@ -91,7 +91,7 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
   // Schedule: at each distance, split first while the section outgrows r_c = 2 sigma0 (keeps
   // level 0 as long as possible), then read the continuous level lambda = log2(r / (2 sigma0)),
   // sigma_lambda = sigma0 2^lambda = r / 2 -- the per-axis standard deviation of a uniform disc of
-  // radius r, so the filter has the section's second moment (occlusion.h, "Level selection") --
+  // radius r, so the filter has the section's second moment (docs/cone_tracing.md, "Level selection") --
   // blending the two levels around it. Steps are 2.5 sigma_lambda. LevelSelection::thesis rounds
   // lambda up to a whole level instead.
   if (!(m_length > m_gap)) return;
@@ -111,7 +111,7 @@ ConeTracer::ConeTracer(const ExtinctionPyramid& pyramid, const ConeOptions& opti
     double sigma = sigma0 * std::exp2(lambda);
     if (o.unfiltered_grid && o.level == LevelSelection::continuous && r < 2.0 * sigma0 && pyramid.fine().sigma < sigma0) {
       // Narrower than level 0's filter: the unfiltered grid, blended toward level 0 linearly in
-      // log2 sigma (occlusion.h, "Below level 0").
+      // log2 sigma (docs/cone_tracing.md, "Below level 0").
       const double fine = pyramid.fine().sigma;
       const double lambda_fine = std::log2(fine / sigma0);
       const double want = std::max(fine, 0.5 * r);
@@ -185,7 +185,8 @@ double ConeTracer::transmittance(const Vec3d& apex, const Vec3d& axis, double ma
     }
     if (last || all_opaque) break;
   }
-  // Variance within each final cone from the spread between them (occlusion.h, "Lateral variance").
+  // Variance within each final cone from the spread between them (docs/cone_tracing.md, "Lateral
+  // variance").
   double within = 0;
   if (cones > 1) {
     // Depths beyond kSaturatedDepth let nothing through whatever their value, so they enter the

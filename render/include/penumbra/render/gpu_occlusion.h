@@ -10,9 +10,9 @@
 // clamp-to-edge). Differences from the CPU tracer come only from float32 arithmetic (the CPU
 // uses float64 on the same float32 pyramid values): ~1e-6 in transmittance. One exception: the
 // 3- and 7-cone arrangements are turned about the axis by the same rule as ConeTracer (helper
-// axis x while |axis.x| < 0.6, else y), which jumps where |axis.x| = 0.6; an apex within float
-// rounding of that (e.g. grid nodes and an eye with round coordinates) may take the other
-// arrangement on one path, a difference of up to a few 1e-2 at that apex.
+// axis x while |axis.x| < 1/phi = 0.618..., else y); an axis within float rounding of that switch
+// may take the other arrangement on one path, a difference of up to a few 1e-2 at that apex. The
+// switch sits at an irrational value so that axes between round coordinates never meet it.
 //
 // Typical use, per step: GpuExtinctionPyramid::update(pyramid) after the CPU pyramid is rebuilt,
 // then one GpuConeTracer per cone kind (occlusion, shadow) and one call per eye or light:

@@ -1,91 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// render/include/penumbra/render/occlusion.h
+// render/include/penumbra/render/occlusion.h -- directional ambient occlusion and shadows by
+// Gaussian cone tracing through a filtered pyramid of extinction (Campagnolo, ch. 3; on
+// tetrahedral meshes through a resampled grid, sec. 4.2)
 //
-// Directional ambient occlusion and shadows by Gaussian cone tracing (Campagnolo, ch. 3; on
-// unstructured meshes through a resampled grid, sec. 4.2).
+// Pipeline: resample_extinction / ExtinctionResampler give an ExtinctionGrid; ExtinctionPyramid
+// filters it into Gaussian levels (sigma doubling per level); a ConeTracer samples a cone along
+// its axis through them (splits 1 -> 3 -> 7, trapezoid rule), for directional_occlusion and
+// shadow_transmittance at mesh points, in a PreIlluminationVolume or per sample. The GPU tracer
+// is penumbra/render/gpu_occlusion.h.
 //
-// Pipeline.
-//  1. ExtinctionGrid: the transfer function's extinction tau(s) (per world unit) at the nodes of a
-//     regular grid over the mesh bounds; nodes in no tet (outside, holes) have tau = 0.
-//  2. ExtinctionPyramid: level 0 is the grid (its nodes on the bounds at half weight, the half cell
-//     of medium they stand for; extinction, or opacity per cell converted back
-//     afterwards, as in the thesis; opt-in, PyramidQuantity::step_opacity) convolved with a
-//     Gaussian of sigma0 (default: the mean grid spacing, sec. 4.2); level l+1 is level l
-//     convolved with a Gaussian of sqrt(3) sigma_l, so sigma_{l+1} = 2 sigma_l, and kept at every
-//     second node. Built from extinction only; the grid
-//     is zero-padded (tau = 0 beyond the mesh bounds, never clamp-to-edge) and every level carries a
-//     margin of 3 sigma_l so the blur that leaks past the bounds is kept, not cut.
-//  3. ConeTracer: samples along the axis from the gap h0 = 3 sigma0, spaced 2.5 sigma; when the
-//     section radius r = d tan(theta) exceeds r_c = 2 sigma0 the cone first splits 1 -> 3 -> 7
-//     (circle packing in a circle, thesis fig. 3.5: sub-cones inherit the parent's optical depth;
-//     at 3 -> 7 the centre takes the mean of the three and each border pair the closest of the
-//     three); beyond that it reads the continuous level lambda = log2(r / (2 sigma0)), i.e.
-//     sigma_lambda = r / 2, blending levels floor(lambda) and floor(lambda) + 1 linearly (clamped to
-//     the top level); samples are 2.5 sigma_lambda apart. The optical depth is the trapezoid rule
-//     over the sample amplitudes
-//     tau'_s = alpha * kappa(r, sigma) * tau_s; the result is the cosine-weighted mean of exp(-depth)
-//     over the final cones.
-//
-// Level selection. The thesis climbs a whole level when r exceeds r_c = 2 sigma_l, so the level read
-// has sigma anywhere in [r / 2, r): up to twice the section's own width (a uniform disc of radius r
-// has per-axis standard deviation r / 2). The wider filter pulls extinction from outside the cone
-// into it -- near walls and holes, exactly where occlusion matters -- and the error does not
-// average out: on the hole block (bench/occlusion, 20 deg cones) the section-mean optical depth
-// came out +0.10 too high with a mean |error| of 0.42 (depth 2.3 on average) for one cone. The
-// continuous level gives the filter the section's second moment for every r, in any scene: mean
-// |depth error| 0.17, and per point the mean transmittance error against Monte Carlo drops from
-// 0.160 / 0.068 / 0.048 to 0.107 / 0.045 / 0.033 (splits 1 / 3 / 7). Cost: about 2.3x the
-// thesis's fetches per cone (two per blended sample, and 2.5 sigma_lambda steps are shorter than
-// 2.5 sigma of the coarser level). Reading only the nearest level (round(lambda), one fetch, 1.4x)
-// measured as well on that scene but undersizes the filter by up to sqrt(2): a thin plate then
-// reads brighter with 7 cones than with 3, and one cone in a uniform block brighter than Monte
-// Carlo (both tests below catch it). r_c = 2 sigma0 still decides the splits, all on level 0.
-// LevelSelection::thesis keeps the thesis's schedule for comparison (bench/occlusion --level thesis):
-// whole levels, level 0 below r_c = 2 sigma0 as well, one fetch per sample, steps of 2.5 sigma_l.
-//
-// Below level 0. A section narrower than level 0's filter (r < 2 sigma0: near every apex, and
-// along most of a narrow shadow cone) would read extinction from up to twice its own width
-// around it. It reads the resampled grid itself instead (ExtinctionPyramid::fine(): trilinear,
-// a tent of per-axis standard deviation h / sqrt 6 for spacing h), blended toward level 0 as r / 2
-// grows from that to sigma0, linearly in log2 sigma like the levels above, with steps of 2.5
-// times the blended sigma (a few more samples near the apex). Measured on bench/occlusion (mean
-// Delta E against Monte Carlo, CPU, with the lateral variance below), before -> after:
-// hexblock-hole 2.18 -> 1.76 (3 cones, per point), 2.03 -> 1.62 (3, object space), 1.84 -> 1.41
-// (7, object space), AO + 2 deg shadow 2.97 -> 1.56; plate-shadow 0.62 -> 0.59, AO + shadow 0.66
-// -> 0.59; disk-out-ref 0.29 -> 0.21, AO + shadow 0.38 -> 0.19. AO with 3 cones in object space
-// on the 1M-tet holeblock: 1.71x the unlit frame. ConeOptions::unfiltered_grid = false reads
-// level 0 there, as the thesis does.
-//
-// Section weight kappa. Eq. 3-15 takes kappa = (p_r sigma sqrt(2 pi))^2 / (pi r^2), p_r the share
-// of a 1D Gaussian within [-r, r]: the Gaussian integral truncated to the square around the cone
-// section, divided by the disc area. In a uniform medium that gives kappa between 0.46 and 1.27
-// depending on r / sigma, not 1 -- the thesis compensates with the user's alpha. SectionWeight::mean
-// (the default) instead reads the Gaussian-filtered tau_s as the mean extinction over the section
-// (kappa = 1), so a homogeneous medium gives exactly exp(-tau (L - h0)) for every aperture and
-// split count; SectionWeight::thesis is eq. 3-15 literally.
-//
-// Lateral variance. exp(-mean depth) is darker than the mean of exp(-depth) over the rays of a
-// cone (Jensen) wherever the rays see different depths; cosine-weighted Monte Carlo averages the
-// latter. With 3 or 7 final cones, the spread of their depths is a measure of that variation
-// that only lateral structure produces: a plate across the cone or a uniform medium gives every
-// sub-cone the same depth. For a depth that varies linearly across the cone, the variance within
-// a sub-cone of radius r_s (a uniform disc: r_s^2 / 4 per unit gradient squared) relates to the
-// variance of the sub-cone centres at offset rho (3 on a circle: rho^2 / 2; 7: 6/7 of that) by a
-// fixed ratio from the packing: r_s^2 / (2 rho^2) = 0.375 for 3 cones and 7/48 = 0.146 for 7.
-// Each sub-cone then lets through the mean transmittance of a gamma-distributed depth with its
-// own mean mu and that variance V, (1 + V / mu)^(-mu^2 / V) = exp(-mu ln(1 + x) / x), x = V / mu:
-// between exp(-mu) (V = 0) and 1, monotone, never above 1. Measured on bench/occlusion (20 deg
-// cones, image mean Delta E against Monte Carlo), hexblock-hole: 2.68 -> 2.18 (3 cones, per
-// point), 2.53 -> 2.03 (3, object space), 2.32 -> 2.00 (7), 2.16 -> 1.84 (7, object space);
-// plate-shadow: 0.79 -> 0.62 (3), 0.70 -> 0.58 (7). The ratios are not fitted: a larger one
-// (2.5x) lowers hexblock-hole further but overshoots on plate-shadow with 7 cones. Depths enter
-// the spread clamped at 10 (exp(-10) lets nothing visible through): otherwise how far an opaque
-// sub-cone's depth runs past that would brighten its neighbours, and an opaque ball on the axis
-// would read darker at 60 deg than at 45.
-//
-// The axis integral runs over [h0, L] (the same interval as the Monte Carlo reference, eq. 3-7);
-// the thesis's extra half Gaussian before the first sample (eq. 3-16, first term) is left out for
-// that reason.
+// docs/cone_tracing.md derives the method and gives each departure from the thesis with the
+// measurements behind it; the sections the comments below name are there: "Section weight",
+// "Level selection", "Below level 0", "Lateral variance", "Mass at the bounds", "Shadows, and
+// the gap integrated exactly".
 #pragma once
 #include <array>
 #include <cstddef>
@@ -140,17 +67,11 @@ enum class PyramidQuantity {
   extinction,
   /// Level l filters the opacity a = 1 - exp(-tau D_l) of a slab as thick as the
   /// cone step that reads the level, D_l = kConeStepSigmas sigma_l, and converts back with the
-  /// same thickness, tau_l = -ln(1 - a_filtered) / D_l. A step of D_l through tau_l then lets
-  /// through the section's mean transmittance exp(-tau D_l) -- what cosine-weighted rays average --
-  /// instead of exp(-mean tau D_l), which is darker wherever the section is heterogeneous
-  /// (Jensen). Exact in uniform media, like the others. Each level is filtered from the grid.
-  /// Not the default: it assumes the medium fills the slab along the axis, so an occluder thinner
-  /// than D_l (a plate across the cone, the far side of a block) is diluted along the axis too
-  /// and lets light through -- a thin opaque plate reads about 1 - thickness / D_l. Measured on the
-  /// hole block (20 deg cones, per mesh point against Monte Carlo): mean |T error| 0.039 / 0.023 /
-  /// 0.019 for splits 1 / 3 / 7 against 0.107 / 0.045 / 0.033 with opacity -- the floor set by
-  /// exp(-mean depth) within each final cone is 0.077 / 0.028 / 0.015 -- but a thin opaque plate
-  /// seen through it transmits 0.31 where opacity gives < 0.1.
+  /// same thickness, tau_l = -ln(1 - a_filtered) / D_l, so that a step of D_l lets through the
+  /// section's mean transmittance rather than exp(-mean depth). Exact in uniform media, like the
+  /// others. Each level is filtered from the grid. Not the default: it assumes the medium fills
+  /// the slab along the axis, so an occluder thinner than D_l is diluted and lets light through
+  /// (a thin opaque plate reads about 1 - thickness / D_l); docs/cone_tracing.md.
   step_opacity,
 };
 
@@ -194,7 +115,11 @@ struct PyramidLevel {
   double sample(const Vec3d& p) const;
 };
 
-/// The mip pyramid of Gaussian-filtered extinction (thesis sec. 3.2.1 and 3.2.3).
+/// The mip pyramid of Gaussian-filtered extinction (thesis sec. 3.2.1 and 3.2.3). Level 0 is the
+/// grid filtered with sigma0 (its nodes on the bounds at half weight: "Mass at the bounds"); level
+/// l + 1 is level l filtered with sqrt(3) sigma_l and kept at every second node, so sigma doubles.
+/// Filters read zeros beyond the grid (never clamp-to-edge), and every level keeps a margin of
+/// 3 sigma_l beyond the bounds, so the blur that leaks past them is kept.
 class ExtinctionPyramid {
 public:
   ExtinctionPyramid() = default;
@@ -210,7 +135,7 @@ public:
   double build_ms() const { return m_build_ms; }
   /// The resampled grid itself, unfiltered (extinction; `sigma` is the per-axis standard deviation
   /// of trilinear interpolation, mean spacing / sqrt 6): what sections narrower than level 0's
-  /// filter read (occlusion.h, "Below level 0"). 0 beyond its outermost nodes, which lie on the
+  /// filter read (docs/cone_tracing.md, "Below level 0"). 0 beyond its outermost nodes, which lie on the
   /// mesh bounds (PyramidLevel::empty_beyond_nodes).
   const PyramidLevel& fine() const { return m_fine; }
 
@@ -221,7 +146,7 @@ private:
   double m_build_ms = 0;
 };
 
-/// Which pyramid level a cone section of radius r reads (see "Level selection").
+/// Which pyramid level a cone section of radius r reads (docs/cone_tracing.md, "Level selection").
 enum class LevelSelection {
   continuous,  ///< sigma = r / 2, the two levels around it blended: the default
   /// One whole level: the finest with r <= r_c = 2 sigma_l (sec. 3.2.3), stepping at r_c; level 0
@@ -250,9 +175,9 @@ struct ConeOptions {
   SectionWeight weight = SectionWeight::mean;
   LevelSelection level = LevelSelection::continuous;
   /// Sections narrower than level 0's filter read the unfiltered grid, blended toward level 0
-  /// (see "Below level 0" above); false: level 0, as the thesis. Continuous levels only.
+  /// (docs/cone_tracing.md, "Below level 0"); false: level 0, as the thesis. Continuous levels only.
   bool unfiltered_grid = true;
-  /// Unresolved lateral variance (see "Lateral variance" above): each final sub-cone lets through
+  /// Unresolved lateral variance (docs/cone_tracing.md, "Lateral variance"): each final sub-cone lets through
   /// the mean transmittance of a gamma-distributed depth whose variance is estimated from the
   /// spread between the sub-cones, instead of exp(-mean depth). No effect with one cone, in
   /// uniform media or where every sub-cone sees the same depth. false: the thesis's exp(-depth).
@@ -265,10 +190,8 @@ struct ConeOptions {
     return o;
   }
   /// Shadow cones keep the gap of 3 sigma0; pass a GapDepth to shadow_transmittance to integrate
-  /// it exactly. Starting the cone at the point instead (gap 0) reads the grid there, which smears
-  /// extinction across the mesh boundary: against the exact shadow on bench/occlusion it measured
-  /// better than skipping the gap on plate-shadow (mean Delta E 1.38 -> 0.47) but not on
-  /// hexblock-hole (3.20 -> 3.30 per point), where the gap integrated exactly gives 0.89.
+  /// it exactly. A gap of 0 would read the grid at the point, which smears extinction across the
+  /// mesh boundary.
   static ConeOptions shadow(double aperture_deg = 1.0, int splits = 1) {
     ConeOptions o;
     o.aperture_deg = aperture_deg;
@@ -291,7 +214,12 @@ struct ConeSample {
   double blend = 0;  ///< weight of level + 1, mixed linearly with `level` (continuous level)
 };
 
-/// Traces cones through an ExtinctionPyramid. Immutable; transmittance() is thread-safe.
+/// Traces cones through an ExtinctionPyramid. Samples run along the axis from the gap h0 to the
+/// length L, kConeStepSigmas apart in the sigma they read; the cone splits 1 -> 3 -> 7 while its
+/// sections outgrow 2 sigma0, then reads the level `level` selects; the optical depth is the
+/// trapezoid rule over alpha kappa tau, and the result the cosine-weighted mean over the final
+/// cones. The schedule depends only on the options and sigma0 and is built once. Immutable;
+/// transmittance() is thread-safe.
 class ConeTracer {
 public:
   /// Throws Error(invalid_argument) for bad options or an empty pyramid. The pyramid must
@@ -308,7 +236,7 @@ public:
   double gap() const { return m_gap; }
   const std::vector<ConeSample>& schedule() const { return m_schedule; }
   /// Variance of the depth within one of `cones` final sub-cones per unit variance between them
-  /// (0 with one cone or with lateral_variance off); see "Lateral variance".
+  /// (0 with one cone or with lateral_variance off); docs/cone_tracing.md, "Lateral variance".
   double lateral_variance_ratio(int cones) const;
 
 private:
@@ -343,17 +271,10 @@ double shadow_transmittance(const ConeTracer& tracer, const ShadowLight& light, 
 
 /// Exact optical depth along short segments through the tets (double precision; a BVH over the
 /// tets, each segment clipped against every tet it meets, tau integrated piece by piece of the
-/// transfer function): what a shadow cone's initial gap h0 holds.
-///
-/// Why. The gap keeps a cone from reading the extinction around its own apex, which the grid
-/// smears over a cell on either side -- across the mesh boundary too, so a point on a lit surface
-/// would read the medium behind it. For occlusion that is the thesis's definition (the Monte
-/// Carlo reference skips the same gap). For a shadow it is an error: the medium right next to x
-/// does attenuate the light. Measured on bench/occlusion (2 deg cones, mean |transmittance error|
-/// per mesh point against the exact single ray to a directional light): hexblock-hole 0.021 with
-/// the gap skipped, 0.017 with no gap (the grid's smear across the surface: 0.037 at boundary
-/// points), 0.009 with the gap integrated here; plate-shadow 0.014 / 0.008 / 0.007; disk-out-ref
-/// 0.034 / 0.0014 / 0.0011.
+/// transfer function): what a shadow cone's initial gap h0 holds. The gap keeps a cone from
+/// reading the extinction the grid smears around its apex, across the mesh boundary too; for
+/// occlusion skipping it is the definition, but the medium right next to x does attenuate a
+/// light (docs/cone_tracing.md, "Shadows, and the gap integrated exactly").
 class GapDepth {
 public:
   /// Throws Error(invalid_argument) for a null mesh or one without tets.
