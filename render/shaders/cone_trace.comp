@@ -10,7 +10,7 @@
 // clamp-to-edge), exactly as PyramidLevel::sample.
 #version 450
 
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = kConeTraceGroup, local_size_y = 1, local_size_z = 1) in;
 
 struct LevelInfo {
   ivec4 dims_offset;  // node counts, first value in `tau`
@@ -56,8 +56,6 @@ uniform vec3 u_dir7[7];
 uniform float u_lateral3;  // ConeTracer::lateral_variance_ratio(3) and (7)
 uniform float u_lateral7;
 
-const float kOpaqueDepth = 40.0;
-const float kSaturatedDepth = 10.0;  // as in cone_tracer.cpp
 
 bool finite_value(float x) { return (floatBitsToUint(x) & 0x7fffffffu) < 0x7f800000u; }
 

@@ -4,7 +4,7 @@
 // beyond the input, never clamp-to-edge), or the per-value conversion to opacity and back.
 #version 450
 
-layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+layout(local_size_x = kPyramidFilterGroup, local_size_y = 1, local_size_z = 1) in;
 
 layout(std430, binding = 0) readonly buffer Src { float src[]; };
 layout(std430, binding = 1) writeonly buffer Dst { float dst[]; };

@@ -10,7 +10,7 @@
 // tets sharing an edge must see bit-identical numbers for the walk to stay watertight.
 #version 450
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = kRayCastTile, local_size_y = kRayCastTile, local_size_z = 1) in;
 
 layout(std430, binding = 0) readonly buffer Points { float point_xyz[]; };
 layout(std430, binding = 1) readonly buffer TetVertices { ivec4 tet_vertices[]; };

@@ -14,6 +14,7 @@
 #include "gpu_tf_layout.h"
 #include "penumbra/core/error.h"
 #include "render_inputs.h"
+#include "shader_constants.h"
 
 namespace penumbra::render {
 namespace gpu {
@@ -252,7 +253,8 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
       const int w = std::min(tile_w, camera.width - x0), h = std::min(tile_h, camera.height - y0);
       gl.ProgramUniform2i(program, m.uniform(gl, "u_tile_origin"), x0, y0);
       gl.ProgramUniform2i(program, m.uniform(gl, "u_tile_size"), w, h);
-      gl.DispatchCompute(static_cast<GLuint>((w + 7) / 8), static_cast<GLuint>((h + 7) / 8), 1);
+      gl.DispatchCompute(static_cast<GLuint>((w + shader::kRayCastTile - 1) / shader::kRayCastTile),
+                         static_cast<GLuint>((h + shader::kRayCastTile - 1) / shader::kRayCastTile), 1);
       gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
       gl.GetNamedBufferSubData(m.buffers[kPixels], 0, static_cast<GLsizeiptr>(static_cast<std::size_t>(w) * h * 16),
                                tile.data());

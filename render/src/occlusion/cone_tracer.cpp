@@ -10,6 +10,7 @@
 
 #include "penumbra/core/error.h"
 #include "penumbra/render/occlusion.h"
+#include "shader_constants.h"
 
 namespace penumbra::render {
 namespace {
@@ -21,11 +22,8 @@ const double kRadius3 = 1.0 / (1.0 + 2.0 / std::sqrt(3.0));
 const double kOffset3 = 1.0 - kRadius3;
 constexpr double kRadius7 = 1.0 / 3.0;
 constexpr double kOffset7 = 2.0 / 3.0;
-// Depth beyond which exp(-depth) is below float resolution of any shading result.
-constexpr double kOpaqueDepth = 40.0;
-// Depth at which a (sub-)cone counts as opaque for the lateral variance: exp(-10) = 4.5e-5, far
-// below one level of an 8-bit image.
-constexpr double kSaturatedDepth = 10.0;
+using shader::kOpaqueDepth;     // shared with cone_trace.comp
+using shader::kSaturatedDepth;
 
 double section_weight(SectionWeight model, double r, double sigma, double alpha) {
   if (model == SectionWeight::mean) return alpha;

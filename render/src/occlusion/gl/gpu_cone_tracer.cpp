@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <string>
 
+#include "shader_constants.h"
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/local_frame.h"
@@ -32,7 +33,7 @@ using gpu::DeviceBuffer;
 using gpu::GlApi;
 
 enum Binding : GLuint { kLevels, kInfos, kSchedule, kPoints, kResult, kGrid, kBindingCount };
-constexpr int kLocalSize = 64;  // cone_trace.comp's local_size_x
+constexpr int kLocalSize = shader::kConeTraceGroup;  // cone_trace.comp's local_size_x
 constexpr double kPi = 3.14159265358979323846;
 
 std::vector<float> local_xyz(const std::vector<Vec3d>& points, const LocalFrame& frame) {

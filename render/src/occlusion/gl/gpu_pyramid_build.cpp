@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "shader_constants.h"
 #include "occlusion/pyramid_filter_taps.h"
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
@@ -29,7 +30,7 @@ using gpu::CurrentContext;
 using gpu::DeviceBuffer;
 using gpu::GlApi;
 
-constexpr int kLocalSize = 64;  // pyramid_filter.comp's local_size_x
+constexpr int kLocalSize = shader::kPyramidFilterGroup;  // pyramid_filter.comp's local_size_x
 constexpr const char* kWho = "gpu_build_pyramid_levels";
 
 // The CPU build's taps (pyramid_filter_taps.h) in float for the shader.

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// render/src/shader_constants.h -- the constants the C++ code and the GLSL shaders share
+//
+// Each PNB_SHARED(type, name, value) line is a C++ constant here and, written by the build into
+// every shader after its #version line (render/shaders/embed_shader.cmake), a GLSL constant of
+// the same name and value there: the two cannot differ. Types: double (GLSL float), int, unsigned
+// (GLSL uint).
+#pragma once
+
+#define PNB_SHARED(type, name, value) inline constexpr type name = value;
+
+namespace penumbra::render::shader {
+
+// Work-group sizes: the shaders' local_size and the dispatches' group counts.
+PNB_SHARED(int, kRayCastTile, 8)         // ray_cast.comp: tiles of kRayCastTile x kRayCastTile pixels
+PNB_SHARED(int, kConeTraceGroup, 64)     // cone_trace.comp
+PNB_SHARED(int, kPyramidFilterGroup, 64)  // pyramid_filter.comp
+
+// Cone tracing (cone_tracer.cpp, cone_trace.comp): a depth beyond which exp(-depth) is below
+// float resolution of any shading result, and the depth at which a (sub-)cone counts as opaque
+// for the lateral variance (exp(-10) = 4.5e-5, far below one level of an 8-bit image).
+PNB_SHARED(double, kOpaqueDepth, 40.0)
+PNB_SHARED(double, kSaturatedDepth, 10.0)
+
+}  // namespace penumbra::render::shader
+
+#undef PNB_SHARED
