@@ -115,8 +115,8 @@ bool evict(const Vector& v) {
 }
 
 bool evict(const pc::EncodedPage& p) {
-  bool ok = evict(p.c8) && evict(p.cw) && evict(p.mean_q) && evict(p.i8) && evict(p.iw);
-  ok = ok && evict(p.ca) && evict(p.shift) && evict(p.ia);
+  bool ok = evict(p.vq.c8) && evict(p.vq.cw) && evict(p.means.q) && evict(p.vq.i8) && evict(p.vq.iw);
+  ok = ok && evict(p.aligned.ca) && evict(p.aligned.shift) && evict(p.aligned.ia);
   const pc::BitBlocks& b = p.blocks;
   ok = ok && evict(b.group_offsets) && evict(b.widths) && evict(b.payload) && evict(b.section_bits);
   const pc::LaneBlocks& l = p.lanes;

@@ -64,7 +64,7 @@ bool make_blocks_alike(pc::EncodedPage& p, const std::string& spec) {
   const std::uint32_t n = p.step_count;
   if (L.empty() || n < 3 || T < 3 || T > n || std::max({w1, w2, w3, w}) > 32) return false;
   const std::uint64_t blocks = L.block_count();
-  const std::uint64_t bits = p.first_width + w1 + w2 + std::uint64_t(T - 3) * w3 + std::uint64_t(n - T) * w;
+  const std::uint64_t bits = p.quantiser.first_width + w1 + w2 + std::uint64_t(T - 3) * w3 + std::uint64_t(n - T) * w;
   for (std::uint64_t b = 0; b < blocks; ++b) {
     const std::uint8_t widths[5] = {std::uint8_t(w1), std::uint8_t(w2), std::uint8_t(w3), std::uint8_t(w), 0};
     std::copy(widths, widths + 5, L.widths.begin() + 5 * b);

@@ -59,19 +59,18 @@ void AlignedFrames::frame(const float* x, const std::uint64_t* vertices, std::ui
 }
 
 void encode_aligned_page(EncodedPage& page, const Window& win, const AlignedFrames& frames,
-                         const AlignedCodebook& codebook, const MethodChoice& choice) {
+                         const TrainedAlignedCodebook& codebook, const MethodChoice& choice) {
   const std::uint64_t N = win.n_vertices;
   const std::uint32_t W = win.width, n = win.steps, K = page.codebook_size;
-  page.mean_q = frames.level.q;
-  page.mean_lo = frames.level.lo;
-  page.mean_scale = frames.level.scale;
-  page.ca = codebook.entries.values;
-  page.ca_q = codebook.entries.q;
-  page.ca_lo = codebook.entries.lo;
-  page.ca_scale = codebook.entries.scale;
-  page.shift = frames.shift;
-  page.ia.resize(N);
-  const PartialNearest search(page.ca.data(), K, frames.dim, n);
+  page.means = frames.level.stored();
+  AlignedCodebook& aligned = page.aligned;
+  aligned.ca = codebook.entries.values;
+  aligned.ca_q = codebook.entries.q;
+  aligned.ca_lo = codebook.entries.lo;
+  aligned.ca_scale = codebook.entries.scale;
+  aligned.shift = frames.shift;
+  aligned.ia.resize(N);
+  const PartialNearest search(aligned.ca.data(), K, frames.dim, n);
   auto encode_group = [&](std::uint64_t first, std::uint64_t last, std::vector<float>& x) {
     thread_local std::vector<float> u;
     thread_local std::vector<std::uint32_t> offsets;
@@ -79,13 +78,13 @@ void encode_aligned_page(EncodedPage& page, const Window& win, const AlignedFram
     win.gather(first, last - first, x.data());
     frames.frame(x.data(), nullptr, first, last - first, W, n, u, offsets);
     const PartialVectors set{u.data(), offsets.data(), last - first, frames.dim, n};
-    search.nearest(set, 0, last - first, page.ia.data() + first);
+    search.nearest(set, 0, last - first, aligned.ia.data() + first);
   };
   const bool residual = choice.method == PageMethod::vq_aligned_residual;
-  encode_vq_vertices(page, N, W, n, residual, choice.step, choice.bound, encode_group,
+  encode_vq_vertices(page, N, W, n, residual, choice.quantiser.step, choice.bound, encode_group,
                      [&](std::uint64_t v, float* out) {
-                       aligned_series(frames.level.values[v], page.ca.data() + std::size_t(page.ia[v]) * frames.dim,
-                                      W, page.shift[v], n, out);
+                       aligned_series(frames.level.values[v], aligned.ca.data() + std::size_t(aligned.ia[v]) * frames.dim,
+                                      W, aligned.shift[v], n, out);
                      });
 }
 

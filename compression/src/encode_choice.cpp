@@ -54,9 +54,8 @@ void estimate_coded_bytes(const Window& win, const TrainingSample& sample, const
   for (std::uint64_t i = 0; i < S; ++i) {
     const float* x = sample.series_of(i, W);
     training.sample_series(win, sample, i, base.data());
-    vq_bits += double(encode_residual_section(x, n, base.data(), c.step, c.bound, nullptr, z.data()).bits);
-    pred_bits +=
-        double(encode_predictive_section(x, n, c.lo, c.step, c.bound, c.first_width, nullptr, k.data(), z.data()).bits);
+    vq_bits += double(encode_residual_section(x, n, base.data(), c.quantiser.step, c.bound, nullptr, z.data()).bits);
+    pred_bits += double(encode_predictive_section(x, n, c.quantiser, c.bound, nullptr, k.data(), z.data()).bits);
   }
   const double per_vertex_overhead = 0.5 + 8.0 / kGroup;  // width nibble + group offset
   const double N = double(win.n_vertices);
@@ -85,11 +84,11 @@ MethodChoice choose_method(const Window& win, const TrainingSample& sample, cons
     c.bound = float(std::sqrt(vq_mse));
     c.method = PageMethod::predictive;
   }
-  c.step = 2.f * c.bound;
-  c.lo = value_min;
+  c.quantiser.step = 2.f * c.bound;
+  c.quantiser.lo = value_min;
   c.vq_estimate = vq_base_bytes(win, training, params.codebook_size);
   if (c.bound > 0) {
-    c.first_width = first_value_width(c.lo, value_max, c.step);
+    c.quantiser.first_width = first_value_width(value_min, value_max, c.quantiser.step);
     estimate_coded_bytes(win, sample, training, c);
     if (c.method == PageMethod::vq_residual && c.predictive_estimate < c.vq_estimate) c.method = PageMethod::predictive;
   }

@@ -11,18 +11,8 @@
 
 namespace penumbra::compression::detail {
 
-namespace {
-
-void set_integer_scale(EncodedPage& page, const MethodChoice& choice) {
-  page.step = choice.step;
-  page.lo = choice.lo;
-  page.first_width = choice.first_width;
-}
-
-}  // namespace
-
 void encode_predictive_page(EncodedPage& page, const Window& win, const MethodChoice& c) {
-  set_integer_scale(page, c);
+  page.quantiser = c.quantiser;
   const std::uint32_t W = win.width, n = win.steps;
   page.blocks = build_bit_blocks(win.n_vertices, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
     thread_local std::vector<float> x;
@@ -33,16 +23,16 @@ void encode_predictive_page(EncodedPage& page, const Window& win, const MethodCh
     z.resize(W);
     win.gather(first, last - first, x.data());
     run([&](std::uint64_t v, BitWriter& writer) {
-      return encode_predictive_section(x.data() + (v - first) * W, n, c.lo, c.step, c.bound, c.first_width, &writer,
-                                       k.data(), z.data())
+      return encode_predictive_section(x.data() + (v - first) * W, n, c.quantiser, c.bound, &writer, k.data(), z.data())
           .code;
     });
   });
 }
 
 void encode_predictive_lanes_page(EncodedPage& page, const Window& win, const MethodChoice& c) {
-  set_integer_scale(page, c);
-  page.lanes = build_lane_blocks(win.n_vertices, win.steps, win.width, c.lo, c.step, c.bound, c.first_width,
+  page.quantiser = c.quantiser;
+  const Quantiser& q = c.quantiser;
+  page.lanes = build_lane_blocks(win.n_vertices, win.steps, win.width, q.lo, q.step, c.bound, q.first_width,
                                  [&](std::uint64_t first, std::uint64_t count, float* x) { win.gather(first, count, x); });
   // The builder leaves the derived tables empty; deriving them checks the blocks as a parser would.
   const std::string error = lane_blocks_error(page, &page.lanes);

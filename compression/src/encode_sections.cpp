@@ -19,12 +19,11 @@ SectionCost write_raw(const float* x, std::uint32_t steps, BitWriter* writer) {
 }
 
 /// k_t of each step, or false where one falls outside [0, 2^first_width) or misses the bound.
-bool predictive_integers(const float* x, std::uint32_t steps, float lo, float step, float bound,
-                         std::uint32_t first_width, std::int64_t* k) {
+bool predictive_integers(const float* x, std::uint32_t steps, const Quantiser& q, float bound, std::int64_t* k) {
   for (std::uint32_t t = 0; t < steps; ++t) {
-    const double kd = round_to_integer((double(x[t]) - lo) / step);
-    const float rebuilt = lo + float(kd) * step;
-    if (!(kd >= 0 && kd < double(1ull << first_width)) || std::fabs(double(x[t]) - double(rebuilt)) > bound)
+    const double kd = round_to_integer((double(x[t]) - q.lo) / q.step);
+    const float rebuilt = q.lo + float(kd) * q.step;
+    if (!(kd >= 0 && kd < double(1ull << q.first_width)) || std::fabs(double(x[t]) - double(rebuilt)) > bound)
       return false;
     k[t] = std::int64_t(kd);
   }
@@ -59,10 +58,9 @@ SectionCost encode_residual_section(const float* x, std::uint32_t steps, const f
   return {layout.code, layout.bits};
 }
 
-SectionCost encode_predictive_section(const float* x, std::uint32_t steps, float lo, float step, float bound,
-                                      std::uint32_t first_width, BitWriter* writer, std::int64_t* k,
-                                      std::uint32_t* z) {
-  if (!predictive_integers(x, steps, lo, step, bound, first_width, k)) return write_raw(x, steps, writer);
+SectionCost encode_predictive_section(const float* x, std::uint32_t steps, const Quantiser& q, float bound,
+                                      BitWriter* writer, std::int64_t* k, std::uint32_t* z) {
+  if (!predictive_integers(x, steps, q, bound, k)) return write_raw(x, steps, writer);
   const std::uint32_t count = steps - 1;
   ValueLayout best;
   best.code = BitBlocks::kRawWidth;
@@ -77,10 +75,10 @@ SectionCost encode_predictive_section(const float* x, std::uint32_t steps, float
   if (writer) {
     prediction_errors(k, steps, best_predictor, z);
     writer->put(best_predictor, 1);
-    writer->put(std::uint32_t(k[0]), first_width);
+    writer->put(std::uint32_t(k[0]), q.first_width);
     write_values(*writer, z, count, best);
   }
-  return {best.code, 1 + first_width + best.bits};
+  return {best.code, 1 + q.first_width + best.bits};
 }
 
 }  // namespace penumbra::compression::detail

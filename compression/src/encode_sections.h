@@ -27,13 +27,12 @@ struct SectionCost {
 SectionCost encode_residual_section(const float* x, std::uint32_t steps, const float* base, float step, float bound,
                                     BitWriter* writer, std::uint32_t* z);
 
-/// Error-bounded predictive coding of one vertex: k_t = round((x - lo) / step), stored as k_0
-/// and the zigzag prediction errors of whichever predictor packs smaller (predictive_layout.h);
-/// raw float32 values where that cannot hold. Writes nothing when writer is null. k, z: scratch
-/// of `steps` values.
-SectionCost encode_predictive_section(const float* x, std::uint32_t steps, float lo, float step, float bound,
-                                      std::uint32_t first_width, BitWriter* writer, std::int64_t* k,
-                                      std::uint32_t* z);
+/// Error-bounded predictive coding of one vertex: k_t = round((x - q.lo) / q.step), stored as
+/// k_0 (q.first_width bits) and the zigzag prediction errors of whichever predictor packs smaller
+/// (predictive_layout.h); raw float32 values where that cannot hold. Writes nothing when writer
+/// is null. k, z: scratch of `steps` values.
+SectionCost encode_predictive_section(const float* x, std::uint32_t steps, const Quantiser& q, float bound,
+                                      BitWriter* writer, std::int64_t* k, std::uint32_t* z);
 
 /// The per-vertex records of a VQ page: encode_group(first, last, x) chooses the codewords of
 /// vertices [first, last) (x: scratch for their windows, left holding them). With a residual,
@@ -48,7 +47,7 @@ void encode_vq_vertices(EncodedPage& page, std::uint64_t N, std::uint32_t W, std
     });
     return;
   }
-  page.step = step;
+  page.quantiser.step = step;
   page.blocks = build_bit_blocks(N, [&](std::uint64_t first, std::uint64_t last, const auto& run) {
     thread_local std::vector<float> x, vbase;
     thread_local std::vector<std::uint32_t> scratch;

@@ -43,6 +43,8 @@ struct Quantised16 {
   float lo = 0, scale = 0;
   std::vector<std::uint16_t> q;
   std::vector<float> values;  ///< dequantised: what the decoder rebuilds
+
+  VertexMeans stored() const { return {lo, scale, q}; }
 };
 
 /// Quantises x to 16 bits over [min x, max x]; the encoder goes on with the dequantised values,
@@ -94,7 +96,7 @@ void block_means(const Window& win, const float* x, const float* m, std::uint64_
 void remove_d8(const Window& win, const std::vector<float>& c8, const float* x, const float* m,
                const std::uint8_t* i8, std::uint64_t count, float* r);
 
-struct PlainCodebooks {
+struct TrainedPlainCodebooks {
   std::vector<float> c8;  ///< K x 8
   std::vector<float> cw;  ///< K x W
   std::vector<std::uint8_t> i8, iw;  ///< entries of each sample vertex
@@ -118,7 +120,7 @@ struct AlignedFrames {
 };
 AlignedFrames align_window(const Window& win);
 
-struct AlignedCodebook {
+struct TrainedAlignedCodebook {
   Quantised16 entries;                     ///< K x dim, stored in 16 bits; encoding uses the stored values
   std::vector<std::uint8_t> sample_index;  ///< entry of each sample vertex
   double mse = 0;                          ///< per real value, on the sample
@@ -127,10 +129,10 @@ struct AlignedCodebook {
 // --- training (encode_training.cpp) ---
 
 struct Training {
-  PlainCodebooks plain;
+  TrainedPlainCodebooks plain;
   bool tried_aligned = false;  ///< frames and aligned were trained
   AlignedFrames frames;
-  AlignedCodebook aligned;
+  TrainedAlignedCodebook aligned;
   bool use_aligned = false;  ///< the aligned codebook fits the sample better
   double seconds = 0;        ///< spent in LBG
 
@@ -147,9 +149,7 @@ Training train_codebooks(const Window& win, const TrainingSample& sample, const 
 struct MethodChoice {
   PageMethod method = PageMethod::vq;
   float bound = 0;  ///< what the residual or predictive coder holds (0: none)
-  float step = 0;   ///< 2 bound: the quantisation step
-  float lo = 0;     ///< predictive: value of k = 0
-  std::uint32_t first_width = 0;  ///< predictive: bits of k_0
+  Quantiser quantiser;  ///< step = 2 bound; lo and first_width where the bound is positive
   double snr_db = 0;              ///< VQ's signal-to-noise ratio on the sample
   double vq_estimate = 0, predictive_estimate = 0;  ///< bytes of the page
 };
@@ -159,11 +159,11 @@ MethodChoice choose_method(const Window& win, const TrainingSample& sample, cons
 // --- one page encoder per method family ---
 
 /// vq, vq_residual.
-void encode_vq_page(EncodedPage& page, const Window& win, const Quantised16& means, PlainCodebooks codebooks,
+void encode_vq_page(EncodedPage& page, const Window& win, const Quantised16& means, TrainedPlainCodebooks codebooks,
                     const MethodChoice& choice, std::uint32_t search_candidates);
 /// vq_aligned, vq_aligned_residual.
 void encode_aligned_page(EncodedPage& page, const Window& win, const AlignedFrames& frames,
-                         const AlignedCodebook& codebook, const MethodChoice& choice);
+                         const TrainedAlignedCodebook& codebook, const MethodChoice& choice);
 /// predictive: per-vertex sections in bit blocks.
 void encode_predictive_page(EncodedPage& page, const Window& win, const MethodChoice& choice);
 /// predictive_lanes: the predictive coder in blocks of 16 vertices.

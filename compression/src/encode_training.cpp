@@ -24,7 +24,7 @@ auto timed(double& seconds, const Train& train) {
 }
 
 /// Mean squared error per real value of the sample against its VQ series.
-double plain_sample_mse(const Window& win, const TrainingSample& sample, const PlainCodebooks& books) {
+double plain_sample_mse(const Window& win, const TrainingSample& sample, const TrainedPlainCodebooks& books) {
   const std::uint32_t W = win.width, n = win.steps;
   const std::uint64_t S = sample.size();
   double err = 0;
@@ -39,11 +39,11 @@ double plain_sample_mse(const Window& win, const TrainingSample& sample, const P
 }
 
 /// D8 on the sample, then D_W on what the decoded D8 leaves (closed loop); warm from `from`.
-PlainCodebooks train_plain(const Window& win, const TrainingSample& sample, const CodecParams& params,
+TrainedPlainCodebooks train_plain(const Window& win, const TrainingSample& sample, const CodecParams& params,
                            const WarmStart* from) {
   const std::uint32_t K = params.codebook_size, W = win.width;
   const std::uint64_t S = sample.size();
-  PlainCodebooks books;
+  TrainedPlainCodebooks books;
   std::vector<float> d8(S * 8), r(S * W);
   block_means(win, sample.series.data(), sample.means.data(), S, d8.data());
   books.i8.resize(S);
@@ -81,7 +81,7 @@ AlignedTrainingSet aligned_training_set(const Window& win, const AlignedFrames& 
 }
 
 /// The aligned codebook from `init` (warm) or from scratch (null), assigned to the whole sample.
-AlignedCodebook train_aligned(const Window& win, const AlignedFrames& frames, const TrainingSample& sample,
+TrainedAlignedCodebook train_aligned(const Window& win, const AlignedFrames& frames, const TrainingSample& sample,
                               const CodecParams& params, const std::vector<float>* init) {
   const std::uint32_t K = params.codebook_size, n = win.steps, dim = frames.dim;
   const std::uint64_t S = sample.size();
@@ -89,7 +89,7 @@ AlignedCodebook train_aligned(const Window& win, const AlignedFrames& frames, co
   const PartialVectors train_set{set.u_train.data(), set.offsets_train.data(), set.offsets_train.size(), dim, n};
   // Half the splitting iterations of the plain codebooks: aligned vectors converge faster, and
   // this codebook is trained on top of the plain ones.
-  AlignedCodebook books;
+  TrainedAlignedCodebook books;
   books.entries = quantise_16bit(train_lbg_partial(train_set, K, std::max(2u, params.cold_iterations / 2),
                                                    params.warm_iterations, params.seed + 2, init));
   const PartialVectors all{set.u.data(), set.offsets.data(), S, dim, n};
@@ -115,10 +115,10 @@ void retrain_stale_codebooks(Training& t, const Window& win, const TrainingSampl
   if (!warm) return;
   const bool aligned_leads = t.tried_aligned && warm->aligned_page;
   if (aligned_leads && warm_aligned && t.aligned.mse > 2.0 * warm->ca_mse) {
-    AlignedCodebook cold = timed(t.seconds, [&] { return train_aligned(win, t.frames, sample, params, nullptr); });
+    TrainedAlignedCodebook cold = timed(t.seconds, [&] { return train_aligned(win, t.frames, sample, params, nullptr); });
     if (cold.mse < t.aligned.mse) t.aligned = std::move(cold);
   } else if (!aligned_leads && t.plain.mse > 2.0 * warm->vq_mse) {
-    PlainCodebooks cold = timed(t.seconds, [&] { return train_plain(win, sample, params, nullptr); });
+    TrainedPlainCodebooks cold = timed(t.seconds, [&] { return train_plain(win, sample, params, nullptr); });
     if (cold.mse < t.plain.mse) t.plain = std::move(cold);
   }
 }

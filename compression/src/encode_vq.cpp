@@ -77,33 +77,32 @@ void remove_d8(const Window& win, const std::vector<float>& c8, const float* x, 
   }
 }
 
-void encode_vq_page(EncodedPage& page, const Window& win, const Quantised16& means, PlainCodebooks codebooks,
+void encode_vq_page(EncodedPage& page, const Window& win, const Quantised16& means, TrainedPlainCodebooks codebooks,
                     const MethodChoice& choice, std::uint32_t search_candidates) {
   const std::uint64_t N = win.n_vertices;
   const std::uint32_t W = win.width, K = page.codebook_size;
-  page.mean_lo = means.lo;
-  page.mean_scale = means.scale;
-  page.mean_q = means.q;
-  page.c8 = std::move(codebooks.c8);
-  page.cw = std::move(codebooks.cw);
-  page.i8.resize(N);
-  page.iw.resize(N);
-  const NearestSearch s8(page.c8.data(), K, 8);
-  const NearestSearch sw(page.cw.data(), K, W);
-  const PlainVqSearch search{win, page.c8, s8, sw, search_candidates};
+  page.means = means.stored();
+  VqCodebooks& vq = page.vq;
+  vq.c8 = std::move(codebooks.c8);
+  vq.cw = std::move(codebooks.cw);
+  vq.i8.resize(N);
+  vq.iw.resize(N);
+  const NearestSearch s8(vq.c8.data(), K, 8);
+  const NearestSearch sw(vq.cw.data(), K, W);
+  const PlainVqSearch search{win, vq.c8, s8, sw, search_candidates};
   const std::vector<float>& mean = means.values;
   auto encode_group = [&](std::uint64_t first, std::uint64_t last, std::vector<float>& x) {
     thread_local std::vector<float> scratch8, scratchw;
     x.resize((last - first) * W);
     win.gather(first, last - first, x.data());
-    search.encode(x.data(), mean.data() + first, last - first, page.i8.data() + first, page.iw.data() + first,
+    search.encode(x.data(), mean.data() + first, last - first, vq.i8.data() + first, vq.iw.data() + first,
                   scratch8, scratchw);
   };
   const bool residual = choice.method == PageMethod::vq_residual;
-  encode_vq_vertices(page, N, W, win.steps, residual, choice.step, choice.bound, encode_group,
+  encode_vq_vertices(page, N, W, win.steps, residual, choice.quantiser.step, choice.bound, encode_group,
                      [&](std::uint64_t v, float* out) {
-                       vq_series(mean[v], page.c8.data() + std::size_t(page.i8[v]) * 8,
-                                 page.cw.data() + std::size_t(page.iw[v]) * W, W, out);
+                       vq_series(mean[v], vq.c8.data() + std::size_t(vq.i8[v]) * 8,
+                                 vq.cw.data() + std::size_t(vq.iw[v]) * W, W, out);
                      });
 }
 

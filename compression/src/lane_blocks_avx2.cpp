@@ -99,10 +99,10 @@ template <bool kPrefetch>
 void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* window) {
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count;
-  const std::uint32_t n = p.step_count, fw = p.first_width;
+  const std::uint32_t n = p.step_count, fw = p.quantiser.first_width;
   const std::uint32_t* rows = lane_rows(L);
   const std::uint16_t* exception_steps = L.exception_steps.data();
-  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  const __m256 lo = _mm256_set1_ps(p.quantiser.lo), step = _mm256_set1_ps(p.quantiser.step);
   for (std::uint64_t c = b; c < e; ++c) {
     const std::uint64_t lanes = lane_block_lanes(N, c), row_end = L.row_start[c + 1];
     const std::uint32_t w1 = lane_width_1(L, c);
@@ -164,7 +164,7 @@ void avx2_window_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, fl
 void avx2_next_impl(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
   const std::uint32_t* rows = lane_rows(L);
-  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  const __m256 lo = _mm256_set1_ps(p.quantiser.lo), step = _mm256_set1_ps(p.quantiser.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = lane_step_width(L, k, t);

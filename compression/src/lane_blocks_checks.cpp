@@ -29,8 +29,8 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
   const LaneBlocks& L = p.lanes;
   const std::uint64_t N = p.vertex_count, B = lane_block_count(N);
   const std::uint32_t n = p.step_count;
-  if (p.first_width < 1 || p.first_width > 31) return "first-value width " + std::to_string(p.first_width) + " outside 1..31";
-  if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
+  if (p.quantiser.first_width < 1 || p.quantiser.first_width > 31) return "first-value width " + std::to_string(p.quantiser.first_width) + " outside 1..31";
+  if (!std::isfinite(p.quantiser.step) || !std::isfinite(p.quantiser.lo)) return "non-finite quantisation step";
   if (L.widths.size() != kLaneWidths * B || L.transient_ends.size() != B || L.linear.size() != B || L.raw.size() != B ||
       L.exception_rows.size() != B)
     return "lane block tables do not have one entry per block of 16 vertices";
@@ -50,7 +50,7 @@ std::string lane_blocks_error(const EncodedPage& p, LaneBlocks* derive) {
     // Lanes past the last vertex are padding: nothing may be stored for them.
     const std::uint16_t mask = lane_block_mask(N, b);
     if ((L.linear[b] & ~mask) || (L.raw[b] & ~mask)) return at_block("predictor or raw flag on a padding lane", b);
-    bits += lane_block_bits(L, b, p.first_width, n);
+    bits += lane_block_bits(L, b, p.quantiser.first_width, n);
     raw += std::uint64_t(std::popcount(L.raw[b])) * n;
     const std::uint64_t row_end = rows + L.exception_rows[b];
     if (row_end > L.exception_steps.size() || row_end > L.exception_lanes.size())

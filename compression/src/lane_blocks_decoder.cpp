@@ -31,8 +31,8 @@ void lane_block_step(const EncodedPage& p, std::uint64_t b, LaneBlockState& s) {
   const std::uint32_t* rows = lane_rows(L);
   const std::uint32_t t = s.t;
   if (t == 0) {
-    for (std::uint32_t l = 0; l < kLaneBlock; ++l) s.k1[l] = s.k2[l] = lane_slot(rows, s.pos, l, p.first_width);
-    s.pos += p.first_width;
+    for (std::uint32_t l = 0; l < kLaneBlock; ++l) s.k1[l] = s.k2[l] = lane_slot(rows, s.pos, l, p.quantiser.first_width);
+    s.pos += p.quantiser.first_width;
     s.t = 1;
     return;
   }
@@ -66,7 +66,7 @@ void write_raw_step(const EncodedPage& p, std::uint64_t b, std::uint32_t t, floa
 
 void lane_block_write(const EncodedPage& p, std::uint64_t b, const LaneBlockState& s, float* row) {
   const std::uint64_t lanes = lane_block_lanes(p.vertex_count, b);
-  for (std::uint64_t l = 0; l < lanes; ++l) row[l] = p.lo + float(std::int32_t(s.k1[l])) * p.step;
+  for (std::uint64_t l = 0; l < lanes; ++l) row[l] = p.quantiser.lo + float(std::int32_t(s.k1[l])) * p.quantiser.step;
   write_raw_step(p, b, s.t - 1, row);
 }
 
@@ -257,9 +257,9 @@ __m512i errors512(const std::uint32_t* rows, std::uint64_t end, std::uint32_t wi
 template <class Bits, bool Full>
 void avx512_window(const EncodedPage& p, std::uint64_t b, std::uint64_t e, float* to, std::uint64_t N) {
   const LaneBlocks& L = p.lanes;
-  const std::uint32_t n = p.step_count, fw = p.first_width;
+  const std::uint32_t n = p.step_count, fw = p.quantiser.first_width;
   const std::uint32_t* rows = lane_rows(L);
-  const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
+  const __m512 lo = _mm512_set1_ps(p.quantiser.lo), step = _mm512_set1_ps(p.quantiser.step);
   for (std::uint64_t c = b; c < e; ++c) {
     const __mmask16 store = lane_block_mask(p.vertex_count, c), linear = L.linear[c];
     const auto put = [&](float* to, __m512 v) __attribute__((always_inline)) {
@@ -349,7 +349,7 @@ template <class Bits>
 void avx512_next(const EncodedPage& p, std::uint64_t b, std::uint64_t e, LaneBlockState* states, float* out) {
   const LaneBlocks& L = p.lanes;
   const std::uint32_t* rows = lane_rows(L);
-  const __m512 lo = _mm512_set1_ps(p.lo), step = _mm512_set1_ps(p.step);
+  const __m512 lo = _mm512_set1_ps(p.quantiser.lo), step = _mm512_set1_ps(p.quantiser.step);
   for (std::uint64_t k = b; k < e; ++k) {
     LaneBlockState& s = states[k];
     const std::uint32_t t = s.t, width = lane_step_width(L, k, t);

@@ -33,9 +33,9 @@ std::string at_vertex(const char* what, std::uint64_t v) { return std::string(wh
 std::string sections_error(const EncodedPage& p, std::vector<std::uint32_t>* derive) {
   const BitBlocks& b = p.blocks;
   const std::uint64_t N = p.vertex_count, groups = (N + BitBlocks::kGroupSize - 1) / BitBlocks::kGroupSize;
-  if (p.method == PageMethod::predictive && (p.first_width < 1 || p.first_width > 31))
-    return "first-value width " + std::to_string(p.first_width) + " outside 1..31";
-  if (!std::isfinite(p.step) || !std::isfinite(p.lo)) return "non-finite quantisation step";
+  if (p.method == PageMethod::predictive && (p.quantiser.first_width < 1 || p.quantiser.first_width > 31))
+    return "first-value width " + std::to_string(p.quantiser.first_width) + " outside 1..31";
+  if (!std::isfinite(p.quantiser.step) || !std::isfinite(p.quantiser.lo)) return "non-finite quantisation step";
   // The tables' sizes and the payload's padding past group_offsets.back() are the page's shape,
   // already checked (see page_contents_error).
   if (b.group_offsets[0] != 0) return "bit payload does not start at 0";
@@ -82,10 +82,10 @@ std::string page_contents_error(const EncodedPage& p, std::vector<std::uint32_t>
   const std::uint64_t N = p.vertex_count, K = p.codebook_size;
   if (uses_plain_vq(p.method))
     for (std::uint64_t v = 0; v < N; ++v)
-      if (p.i8[v] >= K || p.iw[v] >= K) return at_vertex("codebook index out of range", v);
+      if (p.vq.i8[v] >= K || p.vq.iw[v] >= K) return at_vertex("codebook index out of range", v);
   if (uses_aligned_vq(p.method))
     for (std::uint64_t v = 0; v < N; ++v)
-      if (p.ia[v] >= K || p.shift[v] >= p.step_count) return at_vertex("aligned codebook index or shift out of range", v);
+      if (p.aligned.ia[v] >= K || p.aligned.shift[v] >= p.step_count) return at_vertex("aligned codebook index or shift out of range", v);
   if (has_bit_blocks(p.method)) return sections_error(p, derive);
   if (p.method == PageMethod::predictive_lanes) return lane_blocks_error(p, nullptr);
   return {};

@@ -25,16 +25,16 @@ bool has_blocks(PageMethod m) { return has_bit_blocks(m); }
 
 // The quantiser of a page with bit blocks or lane blocks: step, lo, first width and a reserved 0.
 void put_quantiser(ByteWriter& w, const EncodedPage& p) {
-  w.put(p.step);
-  w.put(p.lo);
-  w.put(p.first_width);
+  w.put(p.quantiser.step);
+  w.put(p.quantiser.lo);
+  w.put(p.quantiser.first_width);
   w.put(std::uint32_t(0));
 }
 
 void get_quantiser(ByteReader& r, EncodedPage& p) {
-  p.step = r.get<float>();
-  p.lo = r.get<float>();
-  p.first_width = r.get<std::uint32_t>();
+  p.quantiser.step = r.get<float>();
+  p.quantiser.lo = r.get<float>();
+  p.quantiser.first_width = r.get<std::uint32_t>();
   r.get<std::uint32_t>();
 }
 
@@ -94,7 +94,7 @@ void flip_lane_slot_signs(const EncodedPage& p, std::uint32_t* rows) {
   const LaneBlocks& L = p.lanes;
   std::uint64_t pos = 0;
   for (std::uint64_t b = 0; b < L.block_count(); ++b) {
-    pos += p.first_width;
+    pos += p.quantiser.first_width;
     for (std::uint32_t t = 1; t < p.step_count; ++t) {
       const std::uint32_t width = lane_step_width(L, b, t);
       pos += width;
@@ -111,7 +111,7 @@ void flip_lane_slot_signs(const EncodedPage& p, std::uint32_t* rows) {
 void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
   LaneBlocks& L = p.lanes;
   get_quantiser(r, p);
-  if (p.first_width < 1 || p.first_width > 31) r.fail("first-value width " + std::to_string(p.first_width) + " outside 1..31");
+  if (p.quantiser.first_width < 1 || p.quantiser.first_width > 31) r.fail("first-value width " + std::to_string(p.quantiser.first_width) + " outside 1..31");
   const std::uint64_t B = lane_block_count(p.vertex_count);
   get_lane_layout(r, L, B, p.step_count, version);
   r.get_array(L.linear, B);
@@ -123,7 +123,7 @@ void read_lane_blocks(ByteReader& r, EncodedPage& p, std::uint32_t version) {
     raw += std::uint64_t(std::popcount(L.raw[b])) * p.step_count;
     if (const char* error = lane_block_layout_error(L, b, p.step_count))
       r.fail(std::string(error) + " at lane block " + std::to_string(b));
-    bits += lane_block_bits(L, b, p.first_width, p.step_count);
+    bits += lane_block_bits(L, b, p.quantiser.first_width, p.step_count);
   }
   r.get_array(L.exception_steps, rows);
   r.get_array(L.exception_lanes, rows);
@@ -192,25 +192,25 @@ std::vector<std::uint8_t> serialize_page(const EncodedPage& p, std::uint32_t pag
   }
   w.put_array(p.times);
   if (has_vq(p.method)) {
-    w.put(p.mean_lo);
-    w.put(p.mean_scale);
-    w.put_array(p.c8);
+    w.put(p.means.lo);
+    w.put(p.means.scale);
+    w.put_array(p.vq.c8);
     // A partial window stores only the D_W columns of its steps.
     for (std::uint32_t e = 0; e < p.codebook_size; ++e)
-      w.append(p.cw.data() + std::size_t(e) * p.window, std::size_t(p.step_count) * 4);
-    w.put_array(p.mean_q);
-    w.put_array(p.i8);
-    w.put_array(p.iw);
+      w.append(p.vq.cw.data() + std::size_t(e) * p.window, std::size_t(p.step_count) * 4);
+    w.put_array(p.means.q);
+    w.put_array(p.vq.i8);
+    w.put_array(p.vq.iw);
   }
   if (uses_aligned_vq(p.method)) {
-    w.put(p.mean_lo);
-    w.put(p.mean_scale);
-    w.put(p.ca_lo);
-    w.put(p.ca_scale);
-    w.put_array(p.ca_q);
-    w.put_array(p.mean_q);
-    w.put_array(p.shift);
-    w.put_array(p.ia);
+    w.put(p.means.lo);
+    w.put(p.means.scale);
+    w.put(p.aligned.ca_lo);
+    w.put(p.aligned.ca_scale);
+    w.put_array(p.aligned.ca_q);
+    w.put_array(p.means.q);
+    w.put_array(p.aligned.shift);
+    w.put_array(p.aligned.ia);
   }
   if (has_blocks(p.method)) {
     put_quantiser(w, p);
@@ -322,29 +322,29 @@ void parse_page_payload(const PageHeader& h, const std::uint8_t* stored, std::ui
   }
   r.get_array(p.times, h.step_count);
   if (has_vq(p.method)) {
-    p.mean_lo = r.get<float>();
-    p.mean_scale = r.get<float>();
-    r.get_array(p.c8, std::uint64_t(K) * 8);
-    reserve_on_huge_pages(p.cw, std::size_t(K) * W);
-    p.cw.assign(std::size_t(K) * W, 0.f);
-    for (std::uint32_t e = 0; e < K; ++e) r.take(p.cw.data() + std::size_t(e) * W, std::size_t(h.step_count) * 4);
-    r.get_array(p.mean_q, N);
-    r.get_array(p.i8, N);
-    r.get_array(p.iw, N);
+    p.means.lo = r.get<float>();
+    p.means.scale = r.get<float>();
+    r.get_array(p.vq.c8, std::uint64_t(K) * 8);
+    reserve_on_huge_pages(p.vq.cw, std::size_t(K) * W);
+    p.vq.cw.assign(std::size_t(K) * W, 0.f);
+    for (std::uint32_t e = 0; e < K; ++e) r.take(p.vq.cw.data() + std::size_t(e) * W, std::size_t(h.step_count) * 4);
+    r.get_array(p.means.q, N);
+    r.get_array(p.vq.i8, N);
+    r.get_array(p.vq.iw, N);
   }
   if (uses_aligned_vq(p.method)) {
     if (W > kMaxAlignedWindow) r.fail("shift-aligned page with a window over 256 steps");
-    p.mean_lo = r.get<float>();
-    p.mean_scale = r.get<float>();
-    p.ca_lo = r.get<float>();
-    p.ca_scale = r.get<float>();
+    p.means.lo = r.get<float>();
+    p.means.scale = r.get<float>();
+    p.aligned.ca_lo = r.get<float>();
+    p.aligned.ca_scale = r.get<float>();
     const std::uint32_t D = 2 * W - 1;
-    r.get_array(p.ca_q, std::uint64_t(K) * D);
-    p.ca.resize(p.ca_q.size());
-    for (std::size_t i = 0; i < p.ca_q.size(); ++i) p.ca[i] = p.ca_lo + float(p.ca_q[i]) * p.ca_scale;
-    r.get_array(p.mean_q, N);
-    r.get_array(p.shift, N);
-    r.get_array(p.ia, N);
+    r.get_array(p.aligned.ca_q, std::uint64_t(K) * D);
+    p.aligned.ca.resize(p.aligned.ca_q.size());
+    for (std::size_t i = 0; i < p.aligned.ca_q.size(); ++i) p.aligned.ca[i] = p.aligned.ca_lo + float(p.aligned.ca_q[i]) * p.aligned.ca_scale;
+    r.get_array(p.means.q, N);
+    r.get_array(p.aligned.shift, N);
+    r.get_array(p.aligned.ia, N);
   }
   if (has_blocks(p.method)) {
     get_quantiser(r, p);

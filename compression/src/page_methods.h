@@ -6,9 +6,9 @@
 
 namespace penumbra::compression::detail {
 
-/// mean + D8 + D_W codebooks (c8, cw, mean_q, i8, iw).
+/// mean + D8 + D_W codebooks (EncodedPage::means, EncodedPage::vq).
 inline bool uses_plain_vq(PageMethod m) { return m == PageMethod::vq || m == PageMethod::vq_residual; }
-/// level + shift-aligned codebook (ca, mean_q, shift, ia).
+/// level + shift-aligned codebook (EncodedPage::means, EncodedPage::aligned).
 inline bool uses_aligned_vq(PageMethod m) {
   return m == PageMethod::vq_aligned || m == PageMethod::vq_aligned_residual;
 }

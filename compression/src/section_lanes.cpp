@@ -111,7 +111,7 @@ PNB_LANES __m256i predict_lanes(__m256i linear, std::uint32_t t, __m256i k1, __m
 __attribute__((target("avx2"))) void residual_step_lanes(const EncodedPage& p, std::uint32_t t, std::uint64_t b,
                                                          std::uint64_t e, float* out,
                                                          std::vector<std::uint64_t>& special) {
-  const __m256 step = _mm256_set1_ps(p.step);
+  const __m256 step = _mm256_set1_ps(p.quantiser.step);
   const __m256i tt = _mm256_set1_epi32(int(t));
   for (std::uint64_t v = b; v < e; v += kLanes) {
     const Block k = load_block(p, v);
@@ -130,7 +130,7 @@ __attribute__((target("avx2"))) void cursor_step_lanes(const EncodedPage& p, std
   const bool predictive = p.method == PageMethod::predictive;
   const std::uint32_t i = predictive ? t - 1 : t;
   const __m256i index = _mm256_set1_epi32(int(i)), one = _mm256_set1_epi32(1);
-  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  const __m256 lo = _mm256_set1_ps(p.quantiser.lo), step = _mm256_set1_ps(p.quantiser.step);
   alignas(32) std::uint32_t patched[kLanes];
   for (std::uint64_t v = b; v < e; v += kLanes) {
     const std::uint32_t packed = packed_codes(p, v);
@@ -355,10 +355,10 @@ __attribute__((target("avx2"))) void unpack_block(const EncodedPage& p, std::uin
     __m256i values = section;  // where each lane's values (or its patched header) start
     if (p.method == PageMethod::predictive) {
       __m256i predictor, first;
-      predictive_heads(group, section, p.first_width, predictor, first);
+      predictive_heads(group, section, p.quantiser.first_width, predictor, first);
       store(c.first + j0, first);
       store(c.linear + j0, _mm256_sub_epi32(zero, predictor));  // predictor 1 (linear): -1
-      values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.first_width)));
+      values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.quantiser.first_width)));
     } else {
       store(c.first + j0, zero);
       store(c.linear + j0, zero);
@@ -437,14 +437,14 @@ constexpr std::uint64_t kResidualPassChunk = 64;
 ResidualLanes unpack_residual_lanes(const EncodedPage& p, std::uint64_t v0, std::uint64_t lanes,
                                     std::vector<std::uint64_t>& special) {
   const auto& c = unpack_residual<kResidualChunk, kResidualStride>(p, v0, lanes, special);
-  return {c.z.data(), c.adds, p.step};
+  return {c.z.data(), c.adds, p.quantiser.step};
 }
 
 __attribute__((target("avx2"))) void residual_window_lanes(const EncodedPage& p, std::uint64_t b, std::uint64_t e,
                                                            float* window, std::vector<std::uint64_t>& special) {
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
-  const __m256 step = _mm256_set1_ps(p.step);
+  const __m256 step = _mm256_set1_ps(p.quantiser.step);
   constexpr std::uint64_t kChunkLanes = kResidualPassChunk;
   for (std::uint64_t v0 = b; v0 < e; v0 += kChunkLanes) {
     const std::uint64_t lanes = std::min(kChunkLanes, e - v0);
@@ -468,7 +468,7 @@ __attribute__((target("avx2"))) void predictive_window_lanes(const EncodedPage& 
                                                              float* window, std::vector<std::uint64_t>& special) {
   const std::uint64_t N = p.vertex_count;
   const std::uint32_t n = p.step_count;
-  const __m256 lo = _mm256_set1_ps(p.lo), step = _mm256_set1_ps(p.step);
+  const __m256 lo = _mm256_set1_ps(p.quantiser.lo), step = _mm256_set1_ps(p.quantiser.step);
   constexpr std::uint64_t kChunkLanes = kPredictiveChunk;
   WindowChunk<kChunkLanes>& c = thread_chunk<kChunkLanes>();
   c.z.resize(std::size_t(n) * kChunkLanes);
@@ -523,7 +523,7 @@ __attribute__((target("avx2"))) std::uint64_t seek_lanes(const EncodedPage& p, s
     if (predictive) {
       // The predictor bit only: the cursor's first step reads k_0 itself.
       predictor = read_lanes(group, section, _mm256_set1_epi32(1));
-      values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.first_width)));
+      values = _mm256_add_epi32(section, _mm256_set1_epi32(int(1 + p.quantiser.first_width)));
     }
     const LaneValues lv = lane_values(group, values, codes, pb);
     // The cursor starts at value index 0: a lane's next exception is its list's first.

@@ -23,7 +23,7 @@ namespace {
 // Bit position of the values of vertex v's section (after a predictive section's predictor
 // bit and k_0).
 std::uint64_t values_start(const EncodedPage& p, std::uint64_t v) {
-  return p.blocks.section_start(v) + (p.method == PageMethod::predictive ? 1 + p.first_width : 0);
+  return p.blocks.section_start(v) + (p.method == PageMethod::predictive ? 1 + p.quantiser.first_width : 0);
 }
 
 }  // namespace
@@ -94,10 +94,10 @@ void cursor_step_vertex(const EncodedPage& p, std::uint32_t t, std::uint64_t v, 
     const std::int32_t k = next_k(s.linear[v], t, s.k1[v], s.k2[v], unzigzag(z));
     s.k2[v] = s.k1[v];
     s.k1[v] = k;
-    out[v] = p.lo + float(k) * p.step;
+    out[v] = p.quantiser.lo + float(k) * p.quantiser.step;
   } else if (p.blocks.width(v) != 0) {
     // Code 0 (all zero) leaves the VQ value untouched, as decode_window does (keeps -0.0f).
-    out[v] = out[v] + float(unzigzag(z)) * p.step;
+    out[v] = out[v] + float(unzigzag(z)) * p.quantiser.step;
   }
 }
 

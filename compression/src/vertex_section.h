@@ -35,10 +35,10 @@ inline bool parse_vertex(const EncodedPage& p, const std::uint8_t* data, std::ui
   }
   std::uint32_t count = n;
   if (p.method == PageMethod::predictive) {
-    if (pos + 1 + p.first_width > limit) return false;
+    if (pos + 1 + p.quantiser.first_width > limit) return false;
     s.predictor = read_bits(data, pos, 1);
-    s.first_value = read_bits(data, pos + 1, p.first_width);
-    pos += 1 + p.first_width;
+    s.first_value = read_bits(data, pos + 1, p.quantiser.first_width);
+    pos += 1 + p.quantiser.first_width;
     count = n - 1;
   }
   if (pos + header_bits(code) > limit) return false;

@@ -72,7 +72,7 @@ inline std::uint32_t patched_value(const std::uint8_t* data, std::uint64_t pos, 
 void residual_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
   const std::uint8_t* data = p.blocks.payload.data();
   const std::uint32_t pb = detail::position_bits(p.step_count);
-  const float step = p.step;
+  const float step = p.quantiser.step;
   thread_local std::vector<std::uint64_t> special;
   special.clear();
   const std::uint8_t* widths = p.blocks.widths.data();
@@ -136,17 +136,17 @@ void section_all(const EncodedPage& p, const std::uint8_t* data, const detail::V
   } else if (p.method == PageMethod::predictive) {
     detail::all_values(data, s.values, n - 1, scratch);
     std::int32_t k = std::int32_t(s.first_value), k2 = k;
-    out[0] = p.lo + float(k) * p.step;
+    out[0] = p.quantiser.lo + float(k) * p.quantiser.step;
     for (std::uint32_t t = 1; t < n; ++t) {
       const std::int32_t next = detail::next_k(s.predictor, t, k, k2, detail::unzigzag(scratch[t - 1]));
       k2 = k;
       k = next;
-      out[t * stride] = p.lo + float(k) * p.step;
+      out[t * stride] = p.quantiser.lo + float(k) * p.quantiser.step;
     }
   } else if (s.values.width || s.values.exceptions) {
     detail::all_values(data, s.values, n, scratch);
     for (std::uint32_t t = 0; t < n; ++t)
-      out[t * stride] = out[t * stride] + float(detail::unzigzag(scratch[t])) * p.step;
+      out[t * stride] = out[t * stride] + float(detail::unzigzag(scratch[t])) * p.quantiser.step;
   }
 }
 
@@ -166,8 +166,8 @@ std::uint64_t vq_residual_lanes(const EncodedPage& p, std::uint64_t b, std::uint
     const detail::ResidualLanes r = detail::unpack_residual_lanes(p, v0, lanes, special);
     // Should it not apply, the caller decodes the rest; raw vertices this chunk listed are
     // decoded again there, to the same values.
-    if (!detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + v0, p.c8.data(), p.i8.data() + v0,
-                           p.cw.data(), p.window, p.iw.data() + v0, lanes, out + v0, p.vertex_count, p.step_count,
+    if (!detail::vq_window(p.means.lo, p.means.scale, p.means.q.data() + v0, p.vq.c8.data(), p.vq.i8.data() + v0,
+                           p.vq.cw.data(), p.window, p.vq.iw.data() + v0, lanes, out + v0, p.vertex_count, p.step_count,
                            &r))
       return v0;
   }
@@ -186,8 +186,8 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
 #else
   const std::uint64_t b = from;
 #endif
-  if (b < e && is_vq(p) && !detail::vq_window(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data(),
-                                     p.i8.data() + b, p.cw.data(), p.window, p.iw.data() + b, e - b, out + b, N, n)) {
+  if (b < e && is_vq(p) && !detail::vq_window(p.means.lo, p.means.scale, p.means.q.data() + b, p.vq.c8.data(),
+                                     p.vq.i8.data() + b, p.vq.cw.data(), p.window, p.vq.iw.data() + b, e - b, out + b, N, n)) {
     // mean + D8 is constant over each of the 8 blocks of steps: computed once per block,
     // then each step adds its D_W value (same float operations as vq_value), eight steps at a
     // time where they share a block.
@@ -195,20 +195,20 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
     thread_local std::vector<std::int32_t> row;
     base.resize(e - b);
     row.resize(e - b);
-    for (std::uint64_t v = b; v < e; ++v) row[v - b] = std::int32_t(p.iw[v]) * std::int32_t(p.window);
+    for (std::uint64_t v = b; v < e; ++v) row[v - b] = std::int32_t(p.vq.iw[v]) * std::int32_t(p.window);
     const std::uint32_t block = p.window / 8;
     for (std::uint32_t t = 0; t < n;) {
       if (t % block == 0)
-        detail::mean_plus_entries(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data() + t / block,
-                                  p.i8.data() + b, e - b, base.data());
+        detail::mean_plus_entries(p.means.lo, p.means.scale, p.means.q.data() + b, p.vq.c8.data() + t / block,
+                                  p.vq.i8.data() + b, e - b, base.data());
       // Eight steps that share a block, read as eight floats of each row (t + 8 <= W keeps the
       // read inside it; a partial window's last steps take a short group).
       if (block % 8 == 0 && t % 8 == 0 && t + 8 <= p.window) {
         const std::uint32_t steps = std::min<std::uint32_t>(8, n - t);
-        detail::add_rows8(p.cw.data() + t, row.data(), base.data(), e - b, out + std::uint64_t(t) * N + b, N, steps);
+        detail::add_rows8(p.vq.cw.data() + t, row.data(), base.data(), e - b, out + std::uint64_t(t) * N + b, N, steps);
         t += steps;
       } else {
-        detail::add_entries(p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, base.data(), e - b,
+        detail::add_entries(p.vq.cw.data() + t, std::int32_t(p.window), p.vq.iw.data() + b, base.data(), e - b,
                             out + std::uint64_t(t) * N + b);
         ++t;
       }
@@ -222,19 +222,19 @@ void window_range(const EncodedPage& p, std::uint64_t from, std::uint64_t e, flo
     offset.resize(e - b);
     const std::int32_t D = std::int32_t(2 * p.window - 1);
     for (std::uint64_t v = b; v < e; ++v) {
-      level[v - b] = detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]);
-      offset[v - b] = std::int32_t(p.ia[v]) * D - std::int32_t(p.shift[v]);
+      level[v - b] = detail::dequantise_mean(p.means.lo, p.means.scale, p.means.q[v]);
+      offset[v - b] = std::int32_t(p.aligned.ia[v]) * D - std::int32_t(p.aligned.shift[v]);
     }
     for (std::uint32_t t = 0; t < n;) {
       // A row holds 2W - 1 values and a vertex's frame starts at most W - 1 into it, so eight
       // values from step t stay inside while t + 8 <= W.
       if (t + 8 <= p.window) {
         const std::uint32_t steps = std::min<std::uint32_t>(8, n - t);
-        detail::add_rows8(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
+        detail::add_rows8(p.aligned.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
                           out + std::uint64_t(t) * N + b, N, steps);
         t += steps;
       } else {
-        detail::add_offsets(p.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
+        detail::add_offsets(p.aligned.ca.data() + (p.window - 1 + t), offset.data(), level.data(), e - b,
                             out + std::uint64_t(t) * N + b);
         ++t;
       }
@@ -279,15 +279,15 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
     }
     if (t == 0) {
       // k_0 is stored as is (after the predictor bit): no parse (playback's usual start).
-      const auto k = std::int32_t(read_bits(data, pos + 1, p.first_width));
-      out[v] = p.lo + float(k) * p.step;
+      const auto k = std::int32_t(read_bits(data, pos + 1, p.quantiser.first_width));
+      out[v] = p.quantiser.lo + float(k) * p.quantiser.step;
       if (k1) k1[v] = k2[v] = k;
       continue;
     }
     parse_vertex(p, data, pos, p.blocks.width(v), kNoLimit, s);
     std::int32_t previous;
     const std::int32_t k = compression::predictive_k(p, data, s, t, scratch.data(), &previous);
-    out[v] = p.lo + float(k) * p.step;
+    out[v] = p.quantiser.lo + float(k) * p.quantiser.step;
     if (k1) k1[v] = k, k2[v] = previous;
   }
 }
@@ -295,11 +295,11 @@ void predictive_step_range(const EncodedPage& p, std::uint32_t t, std::uint64_t 
 
 void vq_base_step(const EncodedPage& p, std::uint32_t t, std::uint64_t b, std::uint64_t e, float* out) {
   if (is_vq(p))
-    vq_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.c8.data() + t / (p.window / 8), p.i8.data() + b,
-                   p.cw.data() + t, std::int32_t(p.window), p.iw.data() + b, e - b, out + b);
+    vq_step_values(p.means.lo, p.means.scale, p.means.q.data() + b, p.vq.c8.data() + t / (p.window / 8), p.vq.i8.data() + b,
+                   p.vq.cw.data() + t, std::int32_t(p.window), p.vq.iw.data() + b, e - b, out + b);
   else  // each vertex reads its aligned entry at frame position t + W - 1 - shift
-    aligned_step_values(p.mean_lo, p.mean_scale, p.mean_q.data() + b, p.ca.data() + (p.window - 1 + t),
-                        p.ia.data() + b, p.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
+    aligned_step_values(p.means.lo, p.means.scale, p.means.q.data() + b, p.aligned.ca.data() + (p.window - 1 + t),
+                        p.aligned.ia.data() + b, p.aligned.shift.data() + b, std::int32_t(2 * p.window - 1), e - b, out + b);
 }
 
 }  // namespace detail
@@ -316,19 +316,19 @@ void detail::require_decodable(const EncodedPage& p, const char* call) {
   if (p.step_count < 1 || p.step_count > W) fail("step count " + std::to_string(p.step_count) + " outside 1..window");
   if (uses_plain_vq(p.method) || uses_aligned_vq(p.method)) {
     if (!valid_codebook_size(K)) fail("codebook size " + std::to_string(K) + " outside 2..256");
-    sized(p.mean_q.size(), N, "mean_q");
+    sized(p.means.q.size(), N, "mean_q");
   }
   if (uses_plain_vq(p.method)) {
-    sized(p.c8.size(), K * 8, "c8");
-    sized(p.cw.size(), K * W, "cw");
-    sized(p.i8.size(), N, "i8");
-    sized(p.iw.size(), N, "iw");
+    sized(p.vq.c8.size(), K * 8, "c8");
+    sized(p.vq.cw.size(), K * W, "cw");
+    sized(p.vq.i8.size(), N, "i8");
+    sized(p.vq.iw.size(), N, "iw");
   }
   if (uses_aligned_vq(p.method)) {
     if (W > kMaxAlignedWindow) fail("shift-aligned page with a window over 256 steps");
-    sized(p.ca.size(), K * (2 * W - 1), "ca");
-    sized(p.shift.size(), N, "shift");
-    sized(p.ia.size(), N, "ia");
+    sized(p.aligned.ca.size(), K * (2 * W - 1), "ca");
+    sized(p.aligned.shift.size(), N, "shift");
+    sized(p.aligned.ia.size(), N, "ia");
   }
   if (has_bit_blocks(p.method)) {
     const std::uint64_t groups = (N + kGroup - 1) / kGroup;
@@ -418,13 +418,13 @@ void decode_vertex(const EncodedPage& p, std::uint64_t v, float* out) {
   }
   if (is_vq(p)) {
     std::vector<float> series(p.window);
-    detail::vq_series(detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]), p.c8.data() + std::size_t(p.i8[v]) * 8,
-                      p.cw.data() + std::size_t(p.iw[v]) * p.window, p.window, series.data());
+    detail::vq_series(detail::dequantise_mean(p.means.lo, p.means.scale, p.means.q[v]), p.vq.c8.data() + std::size_t(p.vq.i8[v]) * 8,
+                      p.vq.cw.data() + std::size_t(p.vq.iw[v]) * p.window, p.window, series.data());
     std::copy(series.begin(), series.begin() + p.step_count, out);
   }
   if (is_aligned(p))
-    detail::aligned_series(detail::dequantise_mean(p.mean_lo, p.mean_scale, p.mean_q[v]),
-                           p.ca.data() + std::size_t(p.ia[v]) * (2 * p.window - 1), p.window, p.shift[v], p.step_count,
+    detail::aligned_series(detail::dequantise_mean(p.means.lo, p.means.scale, p.means.q[v]),
+                           p.aligned.ca.data() + std::size_t(p.aligned.ia[v]) * (2 * p.window - 1), p.window, p.aligned.shift[v], p.step_count,
                            out);
   if (!has_residual(p) && p.method != PageMethod::predictive) return;
   detail::VertexSection s;

@@ -62,8 +62,8 @@ TEST(AlignedVq, MovingFrontIsAlignedAtItsJumpAndBeatsPlainVq) {
   const auto aligned = encode(f, 0, 64, p);
   ASSERT_EQ(aligned.method, PageMethod::vq_aligned);
   // Still 4 bytes per vertex: 16-bit level, shift, entry.
-  EXPECT_EQ(aligned.mean_q.size() * 2 + aligned.shift.size() + aligned.ia.size(), 4u * f.vertices);
-  EXPECT_TRUE(aligned.i8.empty() && aligned.iw.empty() && aligned.c8.empty());
+  EXPECT_EQ(aligned.means.q.size() * 2 + aligned.aligned.shift.size() + aligned.aligned.ia.size(), 4u * f.vertices);
+  EXPECT_TRUE(aligned.vq.i8.empty() && aligned.vq.iw.empty() && aligned.vq.c8.empty());
   p.aligned = false;
   const auto plain = encode(f, 0, 64, p);
   ASSERT_EQ(plain.method, PageMethod::vq);
@@ -105,13 +105,13 @@ TEST(AlignedVq, PartialWindowShiftsStayInsideItsSteps) {
   const auto f = testing::relaxing_front(2000, 20);
   const auto page = encode(f, 0, 20, CodecParams{});
   ASSERT_EQ(page.method, PageMethod::vq_aligned);
-  for (auto s : page.shift) ASSERT_LT(s, 20u);
+  for (auto s : page.aligned.shift) ASSERT_LT(s, 20u);
   // Deterministic for a fixed seed, like the plain codebooks.
   const auto again = encode(f, 0, 20, CodecParams{});
-  EXPECT_EQ(page.ca_q, again.ca_q);
-  EXPECT_EQ(page.shift, again.shift);
-  EXPECT_EQ(page.ia, again.ia);
-  EXPECT_EQ(page.mean_q, again.mean_q);
+  EXPECT_EQ(page.aligned.ca_q, again.aligned.ca_q);
+  EXPECT_EQ(page.aligned.shift, again.aligned.shift);
+  EXPECT_EQ(page.aligned.ia, again.aligned.ia);
+  EXPECT_EQ(page.means.q, again.means.q);
   std::vector<float> out(f.values.size());
   decode_window(page, out.data());
   EXPECT_GT(psnr_db(f.values.data(), out.data(), out.size(), f.range()), 45.0);

@@ -137,7 +137,7 @@ TEST(WindowCodec, SmoothFieldRoundTripIsAccurateAndCompact) {
   const auto e = compare(f.values.data(), out.data(), out.size(), f.range());
   // 4 bytes per vertex and window carry the series; measured ~47 dB here, require 40.
   EXPECT_GT(e.psnr_db, 40.0);
-  EXPECT_EQ(page.mean_q.size() * 2 + page.i8.size() + page.iw.size(), 4u * f.vertices);
+  EXPECT_EQ(page.means.q.size() * 2 + page.vq.i8.size() + page.vq.iw.size(), 4u * f.vertices);
 }
 
 TEST(WindowCodec, StepWindowAndVertexDecodesAreBitIdentical) {
@@ -204,7 +204,7 @@ TEST(WindowCodec, WarmStartCarriesCodebooksAndKeepsQuality) {
   WarmStart warm;
   CodecParams p;
   const auto first = encode(f, 0, 64, p, 0, &warm);
-  EXPECT_EQ(warm.c8, first.c8);
+  EXPECT_EQ(warm.c8, first.vq.c8);
   const auto second = encode(f, 64, 64, p, 0, &warm);
   std::vector<float> out(f.vertices * 64);
   decode_window(second, out.data());
@@ -217,11 +217,11 @@ TEST(WindowCodec, FixedSeedGivesIdenticalPages) {
   const auto f = testing::smooth_blobs(3000, 64);
   const auto a = encode(f, 0, 64, CodecParams{}, 1e-3f);
   const auto b = encode(f, 0, 64, CodecParams{}, 1e-3f);
-  EXPECT_EQ(a.c8, b.c8);
-  EXPECT_EQ(a.cw, b.cw);
-  EXPECT_EQ(a.i8, b.i8);
-  EXPECT_EQ(a.iw, b.iw);
-  EXPECT_EQ(a.mean_q, b.mean_q);
+  EXPECT_EQ(a.vq.c8, b.vq.c8);
+  EXPECT_EQ(a.vq.cw, b.vq.cw);
+  EXPECT_EQ(a.vq.i8, b.vq.i8);
+  EXPECT_EQ(a.vq.iw, b.vq.iw);
+  EXPECT_EQ(a.means.q, b.means.q);
   EXPECT_EQ(a.blocks.payload, b.blocks.payload);
 }
 
@@ -279,14 +279,14 @@ TEST(WindowCodec, MalformedPagesAreRejectedByEveryDecoder) {
   expect_rejected(bad, "codebook size 300");
   bad = good;
   if (bad.method == PageMethod::vq || bad.method == PageMethod::vq_residual) {
-    bad.cw.pop_back();
+    bad.vq.cw.pop_back();
     expect_rejected(bad, "cw holds");
   } else {
-    bad.ca.pop_back();
+    bad.aligned.ca.pop_back();
     expect_rejected(bad, "ca holds");
   }
   bad = good;
-  bad.mean_q.resize(3);
+  bad.means.q.resize(3);
   expect_rejected(bad, "mean_q holds 3");
 }
 
@@ -310,7 +310,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   EXPECT_NO_THROW(validate_page(vq));
   EXPECT_NO_THROW(validate_page(blocks));
   EncodedPage bad = vq;
-  bad.iw[7] = 8;  // one past the codebook: the decoders would read past cw
+  bad.vq.iw[7] = 8;  // one past the codebook: the decoders would read past cw
   expect_invalid(bad, "codebook index out of range at vertex 7");
   bad = vq;
   bad.times.pop_back();
@@ -328,7 +328,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   bad.blocks.widths[149] |= 0xF0;  // the last vertex raw: more bits than its group holds
   expect_invalid(bad, "bits of vertex 299 run past their group");
   bad = blocks;
-  bad.step = std::numeric_limits<float>::infinity();
+  bad.quantiser.step = std::numeric_limits<float>::infinity();
   expect_invalid(bad, "non-finite quantisation step");
   bad = blocks;
   bad.blocks.group_offsets.back() = ~std::uint64_t(0) - 4;  // would wrap around in `back() + 8`
@@ -338,7 +338,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   expect_invalid(bad, "group table is not increasing at vertex group 1");
   if (blocks.method == PageMethod::predictive) {
     bad = blocks;
-    bad.first_width = 40;
+    bad.quantiser.first_width = 40;
     expect_invalid(bad, "first-value width 40");
   }
   // An aligned page: a shift must fall inside the page's steps.
@@ -348,7 +348,7 @@ TEST(WindowCodec, ValidatePageFindsWhatTheDecodersTrust) {
   ASSERT_EQ(shifted.method, PageMethod::vq_aligned) << to_string(shifted.method);
   EXPECT_NO_THROW(validate_page(shifted));
   bad = shifted;
-  bad.shift[11] = 16;
+  bad.aligned.shift[11] = 16;
   expect_invalid(bad, "aligned codebook index or shift out of range at vertex 11");
 }
 

@@ -218,7 +218,7 @@ TEST(FieldFile, PatchedSectionWithoutExceptionsIsRejected) {
     encode([&](std::uint64_t vertex, detail::BitWriter& w) -> std::uint32_t {
       if (predictive) {
         w.put(0, 1);                 // predictor: previous value
-        w.put(0, page.first_width);  // k_0
+        w.put(0, page.quantiser.first_width);  // k_0
       }
       if (vertex != broken) return 0;  // all zero: no value bits
       w.put(0, 4);                     // slot width 0
@@ -256,9 +256,9 @@ TEST(FieldFile, WriterRefusesAPageTheReaderWouldReject) {
   ASSERT_TRUE(page1.method == PageMethod::vq || page1.method == PageMethod::vq_aligned) << to_string(page1.method);
   EncodedPage bad = page1;
   if (bad.method == PageMethod::vq)
-    bad.i8[3] = 200;
+    bad.vq.i8[3] = 200;
   else
-    bad.ia[3] = 200;
+    bad.aligned.ia[3] = 200;
   testing::expect_error([&] { w.write_page(bad); }, ErrorCode::invalid_argument, {"out of range at vertex 3"},
                         "an out-of-range codebook index");
   EXPECT_EQ(w.bytes_written(), written);

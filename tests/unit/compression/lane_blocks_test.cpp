@@ -163,10 +163,10 @@ TEST(LaneBlocks, ZeroWidthStepsAtTheVeryEndOfTheColumnsStayInside) {
   page.times = {0.0, 1.0, 2.0};
   page.value_min = page.value_max = 1000 * step;
   page.bound = bound;
-  page.step = step;
-  page.lo = 0;
-  page.first_width = 16;
-  page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, step, bound, page.first_width,
+  page.quantiser.step = step;
+  page.quantiser.lo = 0;
+  page.quantiser.first_width = 16;
+  page.lanes = detail::build_lane_blocks(N, n, page.window, page.quantiser.lo, step, bound, page.quantiser.first_width,
                                          [&](std::uint64_t, std::uint64_t count, float* x) {
                                            std::fill(x, x + count * page.window, 1000 * step);
                                          });
@@ -239,7 +239,7 @@ TEST(LaneBlocks, ValidatePageFindsFaultsInTheTables) {
   bad.lanes.words.resize(bad.lanes.words.size() - 16);
   expect_invalid(bad, "lane words holds");
   bad = good;
-  bad.first_width = 40;
+  bad.quantiser.first_width = 40;
   expect_invalid(bad, "first-value width 40");
   if (!good.lanes.exception_steps.empty()) {
     bad = good;
@@ -308,7 +308,7 @@ SyntheticField transient_field(std::uint64_t n, std::uint32_t steps) {
 void build_lanes(const SyntheticField& f, EncodedPage& page, detail::LaneLayout layout = detail::LaneLayout::chosen) {
   const std::uint64_t N = f.vertices;
   const std::uint32_t n = page.step_count;
-  page.lanes = detail::build_lane_blocks(N, n, page.window, page.lo, page.step, page.bound, page.first_width,
+  page.lanes = detail::build_lane_blocks(N, n, page.window, page.quantiser.lo, page.quantiser.step, page.bound, page.quantiser.first_width,
                                          [&](std::uint64_t first, std::uint64_t count, float* x) {
                                            for (std::uint64_t v = 0; v < count; ++v)
                                              for (std::uint32_t t = 0; t < n; ++t)
@@ -401,10 +401,10 @@ EncodedPage exact_lane_page(SyntheticField& f, std::uint32_t n) {
   page.times = f.times;
   page.value_min = 0;
   page.value_max = 2100;
-  page.lo = 0;
-  page.step = 1;
+  page.quantiser.lo = 0;
+  page.quantiser.step = 1;
   page.bound = 0.5f;
-  page.first_width = 12;
+  page.quantiser.first_width = 12;
   build_lanes(f, page);
   return page;
 }

@@ -53,10 +53,10 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
   BitBlocks& b = p.blocks;
   LaneBlocks& l = p.lanes;
   switch (rng() % 18) {
-    case 0: scramble(p.i8); break;
-    case 1: scramble(p.iw); break;
-    case 2: scramble(p.ia); break;
-    case 3: scramble(p.shift); break;
+    case 0: scramble(p.vq.i8); break;
+    case 1: scramble(p.vq.iw); break;
+    case 2: scramble(p.aligned.ia); break;
+    case 3: scramble(p.aligned.shift); break;
     case 4: flip_a_bit(b.widths); break;
     case 5: flip_a_bit(b.payload); break;
     case 6:
@@ -64,8 +64,8 @@ void damage(EncodedPage& p, std::mt19937_64& rng) {
         b.section_bits[any(b.section_bits.size())] += static_cast<std::uint32_t>(rng() % 64) - 32;
       break;
     case 7: if (!b.group_offsets.empty()) b.group_offsets[any(b.group_offsets.size())] += (rng() % 16) - 8; break;
-    case 8: p.first_width = static_cast<std::uint32_t>(rng() % 40); break;
-    case 9: if (!p.mean_q.empty()) p.mean_q[any(p.mean_q.size())] = static_cast<std::uint16_t>(rng()); break;
+    case 8: p.quantiser.first_width = static_cast<std::uint32_t>(rng() % 40); break;
+    case 9: if (!p.means.q.empty()) p.means.q[any(p.means.q.size())] = static_cast<std::uint16_t>(rng()); break;
     case 10: p.codebook_size = static_cast<std::uint32_t>(rng() % 300); break;
     case 11: if (b.payload.size() > 16) b.payload.resize(b.payload.size() - 1 - any(8)); break;
     case 12: scramble(l.widths); break;

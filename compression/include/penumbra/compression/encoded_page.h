@@ -64,6 +64,38 @@ struct LaneBlocks {
   bool empty() const { return linear.empty(); }
 };
 
+/// Per-vertex 16-bit values over the window's range: mean(v) = lo + float(q[v]) * scale. The
+/// vertices' means on vq pages, their levels on vq_aligned pages.
+struct VertexMeans {
+  float lo = 0, scale = 0;
+  std::vector<std::uint16_t> q;
+};
+
+/// vq, vq_residual: the D8 and D_W codebooks and each vertex's entries in them.
+struct VqCodebooks {
+  std::vector<float> c8;  ///< codebook_size x 8
+  std::vector<float> cw;  ///< codebook_size x window
+  std::vector<std::uint8_t> i8, iw;
+};
+
+/// vq_aligned, vq_aligned_residual: one codebook over frames of 2 window - 1 steps, and each
+/// vertex's shift and entry.
+struct AlignedCodebook {
+  std::vector<float> ca;             ///< codebook_size x (2 window - 1): ca_lo + float(ca_q) * ca_scale
+  std::vector<std::uint16_t> ca_q;   ///< the codebook as stored
+  float ca_lo = 0, ca_scale = 0;
+  std::vector<std::uint8_t> shift;   ///< step at which the vertex's entry is aligned, < step_count
+  std::vector<std::uint8_t> ia;      ///< entry of ca
+};
+
+/// The integer grid of the residual (vq_residual, vq_aligned_residual: q, zigzag) and of the
+/// predictive coder (predictive, predictive_lanes: k, zigzag deltas).
+struct Quantiser {
+  float step = 0;
+  float lo = 0;                   ///< predictive: value of k = 0
+  std::uint32_t first_width = 0;  ///< predictive: bits of k_0
+};
+
 /// One window of one field, decoded from (or about to be written as) one page.
 /// Reconstruction of step t (0 <= t < step_count) at vertex v, in float, in this order:
 ///   vq:           ((mean(v) + c8[i8[v]][t / (window/8)]) + cw[iw[v]][t])
@@ -71,8 +103,9 @@ struct LaneBlocks {
 ///   vq_aligned:   mean(v) + ca[ia[v]][t + window - 1 - shift[v]]  (mean(v) is the level)
 ///   vq_aligned_residual: vq_aligned + float(q) * step, or raw values
 ///   predictive, predictive_lanes: lo + float(k_t) * step, k_t = k_0 + sum of deltas, or exact raw values
-/// with mean(v) = mean_lo + float(mean_q[v]) * mean_scale. These are the stored values; the
-/// field's values are map.value(stored) (ValueMap; the identity for float32 input).
+/// with mean(v) from `means`. These are the stored values; the field's values are
+/// map.value(stored) (ValueMap; the identity for float32 input). A page holds only its method's
+/// members; the others stay empty.
 struct EncodedPage {
   PageMethod method = PageMethod::vq;
   std::uint64_t first_step = 0;
@@ -89,26 +122,12 @@ struct EncodedPage {
   /// the training sample, and the estimated bytes of VQ (+ residual) and of the predictive coder.
   float sample_snr_db = 0, vq_bytes_estimate = 0, predictive_bytes_estimate = 0;
 
-  // vq / vq_residual
-  float mean_lo = 0, mean_scale = 0;
-  std::vector<float> c8;  ///< codebook_size x 8
-  std::vector<float> cw;  ///< codebook_size x window
-  std::vector<std::uint16_t> mean_q;
-  std::vector<std::uint8_t> i8, iw;
-
-  // vq_aligned / vq_aligned_residual (mean_q, mean_lo, mean_scale hold the level)
-  std::vector<float> ca;             ///< codebook_size x (2 window - 1): ca_lo + float(ca_q) * ca_scale
-  std::vector<std::uint16_t> ca_q;   ///< the codebook as stored
-  float ca_lo = 0, ca_scale = 0;
-  std::vector<std::uint8_t> shift;   ///< step at which the vertex's entry is aligned, < step_count
-  std::vector<std::uint8_t> ia;      ///< entry of ca
-
-  // vq_residual, vq_aligned_residual (quantised residual, zigzag) and predictive (zigzag deltas)
-  float step = 0;
-  float lo = 0;                ///< predictive: value of k = 0
-  std::uint32_t first_width = 0;  ///< predictive: bits of k_0
-  BitBlocks blocks;
-  LaneBlocks lanes;  ///< predictive_lanes (step, lo and first_width as for predictive)
+  VertexMeans means;        ///< vq and vq_aligned pages, with or without a residual
+  VqCodebooks vq;           ///< vq, vq_residual
+  AlignedCodebook aligned;  ///< vq_aligned, vq_aligned_residual
+  Quantiser quantiser;      ///< every page with a residual, and predictive pages
+  BitBlocks blocks;         ///< vq_residual, vq_aligned_residual, predictive
+  LaneBlocks lanes;         ///< predictive_lanes
 
   /// Bytes this page holds in memory (what a pager counts against its cap).
   std::uint64_t resident_bytes() const;
@@ -118,8 +137,8 @@ struct EncodedPage {
 /// once: the one list of a page's arrays, for what must reach all of them.
 template <class F, class... Pages>
 void for_each_array(F&& f, Pages&... p) {
-  f(p.times...), f(p.c8...), f(p.cw...), f(p.mean_q...), f(p.i8...), f(p.iw...);
-  f(p.ca...), f(p.ca_q...), f(p.shift...), f(p.ia...);
+  f(p.times...), f(p.vq.c8...), f(p.vq.cw...), f(p.means.q...), f(p.vq.i8...), f(p.vq.iw...);
+  f(p.aligned.ca...), f(p.aligned.ca_q...), f(p.aligned.shift...), f(p.aligned.ia...);
   f(p.blocks.group_offsets...), f(p.blocks.widths...), f(p.blocks.payload...), f(p.blocks.section_bits...);
   f(p.lanes.widths...), f(p.lanes.transient_ends...), f(p.lanes.linear...), f(p.lanes.raw...);
   f(p.lanes.exception_rows...), f(p.lanes.exception_steps...), f(p.lanes.exception_lanes...);
