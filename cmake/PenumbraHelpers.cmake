@@ -21,4 +21,9 @@ function(pnb_add_module name dir)
     RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
     INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
   install(DIRECTORY ${dir}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  # Tests and benchmarks that check a module's internals (its src/ headers) link this target
+  # instead of reaching into src/ by include path; it is never installed.
+  add_library(penumbra_${name}_internal INTERFACE)
+  target_link_libraries(penumbra_${name}_internal INTERFACE penumbra_${name})
+  target_include_directories(penumbra_${name}_internal INTERFACE ${dir}/src)
 endfunction()
