@@ -10,8 +10,8 @@
 namespace penumbra::render::lighting {
 namespace {
 
-// Tens of thousands of crossings per block. (Advising huge pages for the blocks was tried: the
-// kernel's compaction at first touch then stalled level-1 batches by several ms.)
+// Tens of thousands of crossings per block, on ordinary pages: huge pages make the kernel compact
+// memory at first touch, which stalls level-1 batches by several ms.
 constexpr std::size_t kBlockBytes = std::size_t{2} << 20;
 
 }  // namespace

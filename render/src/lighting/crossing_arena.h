@@ -10,11 +10,10 @@
 
 namespace penumbra::render::lighting {
 
-/// The crossings of every recorded walk of a light, in large blocks handed out in spans. A list
-/// per walk cost a malloc per vertex and a first touch of scattered pages, about 10 % of a cold
-/// light's first pass at 1M tets; here a pass takes one span per batch of walks under a lock, and
-/// a block's pages are touched in order as it fills. Spans stay valid
-/// until reset(); blocks are never moved or freed before the arena is.
+/// The crossings of every recorded walk of a light, in large blocks handed out in spans: a pass
+/// takes one span per batch of walks under a lock, and a block's pages are touched in order as
+/// it fills, where a list per walk would cost a malloc per vertex and a first touch of scattered
+/// pages. Spans stay valid until reset(); blocks are never moved or freed before the arena is.
 class CrossingArena {
 public:
   CrossingArena() = default;

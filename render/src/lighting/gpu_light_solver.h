@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // render/src/lighting/gpu_light_solver.h -- the light-volume kernels on the GPU (OpenGL 4.5 compute)
 //
-// The same model as the CPU solve (see penumbra/render/light_volume.h), in float32 on the device:
+// The same model as the CPU solve (docs/light_volume.md), in float32 on the device:
 //  - level 0: the upwind sweep of level0_sweep.h. A node depends only on its upwind neighbours,
 //    which are one step closer (in index distance |i - c_i| + |j - c_j| + |k - c_k|) to the
 //    light's node c (directional lights: c is a corner just outside the grid). All nodes at one

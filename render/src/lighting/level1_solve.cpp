@@ -441,7 +441,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
     };
     // Looked up once, through a call the compiler does not see into: in a shared library every
     // use of a thread_local is a call of its own, and the compiler repeats it wherever a
-    // reference to it is used (1.7 % of a cold pass's instructions).
+    // reference to it is used.
     auto thread_scratch = []() __attribute__((noinline)) -> Scratch& {
       thread_local Scratch scratch;
       return scratch;
@@ -527,7 +527,7 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       const auto now = std::chrono::steady_clock::now();
       if (deadline != std::chrono::steady_clock::time_point::max()) {
         // The batch shrinks to what is expected to fit before the deadline (a whole one or none
-        // left half a batch of each frame's budget unused on average). The call's first batch
+        // would leave half a batch of each frame's budget unused on average). The call's first batch
         // always runs, so that every call makes progress, down to kLevel1MinBatch vertices (a
         // pass may start with little of the budget left), and whole if never timed. After it,
         // a batch too small to be worth waking the threads for waits for the next call, and so
@@ -547,9 +547,9 @@ bool level1_pass(const Level1Context& ctx, const Light& light, const std::vector
       }
       first_batch = false;
       // After the first pass most batches hold a few vertices to update, if any: the threads are
-      // woken only for enough work (waking them per group cost a few ms per pass). A vertex to
-      // update is a walk of a microsecond or more, so a few dozen are worth it (with 256, the
-      // 4 % of a 1M-tet mesh's vertices in its smallest groups ran on one thread).
+      // woken only for enough work, since waking them per group costs a few ms per pass. A
+      // vertex to update is a walk of a microsecond or more, so a few dozen are worth it, and a
+      // larger threshold would leave the smallest groups on one thread.
       std::size_t work = e - b;
       if (!full) {
         work = 0;

@@ -161,7 +161,7 @@ struct PassState {
   /// Allocates (and touches) the memory of a first pass over np vertices, the recorded walks'
   /// `crossings` included if `record`, while leaving the state as new: a light volume does this
   /// for its first light when it is built, so that the light's first frames do not spend their
-  /// budget on page faults (about 17 000 at 1M tets, 1 ms each on two cores).
+  /// budget on page faults.
   void reserve(std::size_t np, bool record, std::size_t crossings) {
     prepare_walks(np, record);
     if (record) this->crossings.reserve(crossings);
@@ -189,12 +189,11 @@ inline constexpr std::size_t kHintSlice = 1 << 16;
 
 /// First estimates of a pass's timings (PassState::vertex_ms, full_setup_ms, hint_slice_ms) on
 /// this mesh and machine, for a light whose passes have not run yet, so that its first pass
-/// plans its batches from its first call (untimed, a piece waits for a call of its own, and a
-/// new light's call after its start hints left a third of its budget unused). Timed on a light
-/// along -z through a unit medium: the projections of a full pass's set-up, one slice of start
-/// hints, and walks from kLevel1Batch vertices spread over the mesh, run in parallel as a pass
-/// runs them; each rounded up by half (the walks for the rest of a vertex's update, 30 % of a
-/// pass at 1M tets). A pass's own timings replace them as it runs.
+/// plans its batches from its first call (an untimed piece waits for a call of its own). Timed
+/// on a light along -z through a unit medium: the projections of a full pass's set-up, one slice
+/// of start hints, and walks from kLevel1Batch vertices spread over the mesh, run in parallel as
+/// a pass runs them; each rounded up by half, for the walks of the rest of a vertex's update.
+/// A pass's own timings replace them as it runs.
 void prime_pass_timing(const Level1Context& ctx, PassState& state);
 
 /// Vertices per batch of a pass: the granularity at which a time budget can stop it.

@@ -94,8 +94,7 @@ inline std::int32_t hint_start(std::int32_t start) {
 /// of the vertex opposite that face, and each face is tested once per tet instead of once per
 /// star it lies in (four). Ties (a zero area: rays in a face's plane) are left to the search; a
 /// hint that rounding got wrong fails walk_to_light's test and is searched for, so the walks'
-/// results do not change. At 1M tets a new light's walks run 10 % fewer instructions, the sweep
-/// included.
+/// results do not change.
 ///
 /// The points across the light as the sweep reads them: two floats per point relative to the
 /// first, 8 bytes instead of 32, so that its gathers mostly hit the core's own cache.

@@ -11,7 +11,7 @@
 namespace penumbra::render::lighting {
 
 /// Edge weights w_i = 6 (1 / d_i^2) / sum_j (1 / d_j^2) of every point's neighbours (see
-/// light_volume.h): proportional to 1 / d^2 as in the paper, summing to 6 at every point (a
+/// docs/light_volume.md): proportional to 1 / d^2 as in the paper, summing to 6 at every point (a
 /// regular grid's six neighbours at unit spacing), so one step of size s blurs by about
 /// sqrt(2 s) local edge lengths and is equally well conditioned at every vertex of a graded
 /// mesh. Zero-length edges get weight 0.
@@ -27,17 +27,15 @@ inline constexpr std::size_t kScatterSlice = 8;
 /// The order a sweep works in: the points along a Morton curve of their positions, cut into
 /// kScatterChunks blocks, with the sources, the iterate and each point's edges stored in that
 /// order. A point's neighbours then mostly sit just before or after it, so what it gathers is
-/// still in cache; in the mesh's own numbering they were scattered over the arrays and the sweep
-/// waited on memory for most of its time. Positions, not point ids, index everything below.
+/// still in cache, where the mesh's own numbering scatters them over the arrays. Positions, not
+/// point ids, index everything below.
 /// The edges are stored by slices of kScatterSlice positions: slice s has as many columns as its
 /// positions' largest neighbour count, column k holding the k-th neighbour of each position of
 /// the slice, so that a sweep runs one loop per slice over its columns instead of one loop per
-/// point of 5 to 26 neighbours (where the loop's end was mispredicted at every point: 28 % of
-/// the neighbour sums' time at 1M tets). A position with fewer neighbours has weight 0 (and its
-/// own position as id) in the columns it lacks; to keep that padding small, the points within
-/// each window of kDegreeWindow consecutive positions of the curve are sorted by their number of
-/// neighbours (3 % padding at 1M tets, against 29 % along the curve alone). Iterations at 1M
-/// tets: 2.0 -> 1.43 ms.
+/// point of 5 to 26 neighbours, whose end the branch predictor would miss at every point. A
+/// position with fewer neighbours has weight 0 (and its own position as id) in the columns it
+/// lacks; to keep that padding small, the points within each window of kDegreeWindow consecutive
+/// positions of the curve are sorted by their number of neighbours.
 struct ScatterPlan {
   static constexpr std::size_t kDegreeWindow = 128;
   std::vector<std::int32_t> order;        ///< the point at each position
@@ -67,9 +65,8 @@ void to_point_order(const ScatterPlan& plan, const std::vector<float>& by_positi
 /// its eigenvalues are real, and they lie in [-rho, rho], rho = 6 s / (1 + 6 s) (the weights of a
 /// point sum to at most 6). The error then falls by about rho / (1 + sqrt(1 - rho^2)) per
 /// iteration instead of rho (Jacobi) or about rho^2 (Gauss-Seidel): at s = 1, 0.57 against 0.86
-/// and 0.73 (Gauss-Seidel in blocks measured 0.75), so half the iterations of the sweeps it
-/// replaced, and far fewer for larger s. Every iteration reads the previous iterate only, so the
-/// blocks run in parallel and the result does not depend on the thread count.
+/// and 0.73, and far fewer iterations for larger s. Every iteration reads the previous iterate
+/// only, so the blocks run in parallel and the result does not depend on the thread count.
 /// Points whose L0 is not finite are left out of every neighbour sum and take the weighted mean
 /// of their finite neighbours (0 without any), so NaN never spreads. Intermediate iterates may
 /// overshoot by about the remaining error; the converged one is the step's solution to the
