@@ -21,6 +21,9 @@ layout(std430, binding = 5) readonly buffer Nodes { vec4 bvh_nodes[]; };
 layout(std430, binding = 6) readonly buffer Tf { float tf_data[]; };
 layout(std430, binding = 7) writeonly buffer Pixels { vec4 pixels[]; };
 layout(std430, binding = 8) readonly buffer LightRgb { float light_rgb[]; };  // 3 per point (u_shading 2)
+// With u_runs: per pixel of the tile, 1 + 2 kMaxRayRuns: the run count, then per run (entry
+// depth, exit depth) and its premultiplied RGBA.
+layout(std430, binding = 9) writeonly buffer Runs { vec4 runs[]; };
 
 uniform ivec2 u_image_size;
 uniform ivec2 u_tile_origin;     // first pixel of this dispatch
@@ -33,6 +36,7 @@ uniform vec2 u_half_extent;      // tan(fov/2) * aspect, tan(fov/2)
 uniform int u_eye_outside;       // 1: the eye is outside the padded bounds
 uniform float u_reentry_slack;
 uniform float u_stop_transmittance;
+uniform int u_runs;              // 1: record the runs
 uniform int u_tet_count;
 uniform int u_triangle_count;
 uniform int u_breakpoint_count;
@@ -467,6 +471,8 @@ void main() {
   float prev_t = -kInf;
   int prev_id = -1;
   float box_t0 = u_eye_outside != 0 ? 0.0 : -kInf;
+  int run_count = 0;
+  int run_base = (local.y * u_tile_size.x + local.x) * (1 + 2 * kMaxRayRuns);
   for (int n = 0; n < kMaxEntries; ++n) {
     int id;
     float t, s;
@@ -479,8 +485,20 @@ void main() {
     prev_t = t;
     prev_id = id;
     int tet_face = triangles[id].w;
+    vec3 rgb_before = rgb;
+    float T_before = T;
     done = walk(tet_face >> 2, tet_face & 3, t, s, nan, l, rgb, T);
+    if (u_runs != 0 && done > t) {
+      // What this run alone adds: after = before + T_before x run, front to back.
+      if (run_count < kMaxRayRuns) {
+        bool seen = T_before > 0.0;
+        runs[run_base + 1 + 2 * run_count] = vec4(t, done, 0.0, 0.0);
+        runs[run_base + 2 + 2 * run_count] = seen ? vec4((rgb - rgb_before) / T_before, 1.0 - T / T_before) : vec4(0.0);
+      }
+      ++run_count;
+    }
     if (T < u_stop_transmittance) break;
   }
   pixels[local.y * u_tile_size.x + local.x] = vec4(rgb, 1.0 - T);
+  if (u_runs != 0) runs[run_base] = vec4(float(run_count), 0.0, 0.0, 0.0);
 }

@@ -13,6 +13,7 @@
 #include "render_inputs.h"
 #include "penumbra/core/thread_pool.h"
 #include "ray_frame.h"
+#include "ray_runs.h"
 #include "screen_frame.h"
 #include "shade_context.h"
 #include "tet_order.h"
@@ -108,8 +109,7 @@ struct RunStart {
   Composite before;
 };
 
-// Each pixel's runs, while a frame renders (flattened into RayRuns at its end).
-using PixelRuns = std::vector<std::vector<RayRun>>;
+using detail::PixelRuns;
 
 // The run of a walk that began at `start` and left the mesh at `exit_depth` with `after`: what
 // it alone adds, premultiplied (front to back, after = before + T_before x run).
@@ -592,12 +592,7 @@ void CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunct
   if (!options.ray_runs) return m_impl->render_frame(scalars, tf, camera, options, out.image, nullptr);
   PixelRuns runs(static_cast<std::size_t>(camera.width) * camera.height);
   m_impl->render_frame(scalars, tf, camera, options, out.image, &runs);
-  out.runs.offsets.reserve(runs.size() + 1);
-  out.runs.offsets.push_back(0);
-  for (const auto& pixel : runs) {
-    out.runs.runs.insert(out.runs.runs.end(), pixel.begin(), pixel.end());
-    out.runs.offsets.push_back(static_cast<std::uint32_t>(out.runs.runs.size()));
-  }
+  out.runs = detail::flatten_runs(runs);
 }
 
 void CpuRayCaster::Impl::render_frame(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,

@@ -16,6 +16,9 @@ PNB_SHARED(int, kRayCastTile, 8)         // ray_cast.comp: tiles of kRayCastTile
 PNB_SHARED(int, kConeTraceGroup, 64)     // cone_trace.comp
 PNB_SHARED(int, kPyramidFilterGroup, 64)  // pyramid_filter.comp
 
+// Runs inside the mesh a GPU ray returns at most (RenderOptions::ray_runs).
+PNB_SHARED(int, kMaxRayRuns, 16)
+
 // Cone tracing (cone_tracer.cpp, cone_trace.comp): a depth beyond which exp(-depth) is below
 // float resolution of any shading result, and the depth at which a (sub-)cone counts as opaque
 // for the lateral variance (exp(-10) = 4.5e-5, far below one level of an 8-bit image).

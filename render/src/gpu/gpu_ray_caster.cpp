@@ -13,6 +13,7 @@
 #include "gpu_mesh_layout.h"
 #include "gpu_tf_layout.h"
 #include "penumbra/core/error.h"
+#include "ray_runs.h"
 #include "render_inputs.h"
 #include "shader_constants.h"
 
@@ -27,9 +28,11 @@ using gpu::CurrentContext;
 using gpu::GlApi;
 
 enum Binding : GLuint {
-  kPoints, kTetVertices, kTetNext, kScalars, kTriangles, kNodes, kTf, kPixels, kLight, kBindingCount
+  kPoints, kTetVertices, kTetNext, kScalars, kTriangles, kNodes, kTf, kPixels, kLight, kRuns, kBindingCount
 };
 constexpr int kTile = 512;                     // pixels per side of one dispatch
+constexpr int kRunsTile = 128;                 // the same with runs: 33 vec4 per pixel (ray_cast.comp)
+constexpr std::size_t kRunSlots = 1 + 2 * shader::kMaxRayRuns;  // vec4 per pixel in the runs buffer
 constexpr std::size_t kScalarBlock = 1 << 14;  // field values compared and re-sent per block
 
 }  // namespace
@@ -56,7 +59,37 @@ struct GpuRayCaster::Impl {
   /// Sends to buffer `b` the blocks of `values` that differ from `held`; returns the bytes sent.
   std::size_t upload_changed(const GlApi& gl, Binding b, const std::vector<float>& values, Mirror& held);
   GLint uniform(const GlApi& gl, const char* name) const { return gl.GetUniformLocation(dev().ray_cast_program, name); }
+  /// Appends the runs of a w x h tile at (x0, y0) to each pixel's (depths back in world units).
+  void read_runs(const GlApi& gl, int x0, int y0, int w, int h, int width, std::vector<float>& scratch,
+                 detail::PixelRuns& runs) const;
 };
+
+void GpuRayCaster::Impl::read_runs(const GlApi& gl, int x0, int y0, int w, int h, int width, std::vector<float>& scratch,
+                                   detail::PixelRuns& runs) const {
+  const std::size_t slots = static_cast<std::size_t>(w) * h * kRunSlots;
+  scratch.resize(slots * 4);
+  gl.GetNamedBufferSubData(buffers[kRuns], 0, static_cast<GLsizeiptr>(slots * 16), scratch.data());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float* p = &scratch[(static_cast<std::size_t>(y) * w + x) * kRunSlots * 4];
+      const int count = static_cast<int>(p[0]);
+      if (count > shader::kMaxRayRuns)
+        throw Error(ErrorCode::invalid_argument,
+                    "GpuRayCaster::render: pixel (" + std::to_string(x0 + x) + ", " + std::to_string(y0 + y) + ") has " +
+                        std::to_string(count) + " runs inside the mesh, more than the " +
+                        std::to_string(shader::kMaxRayRuns) + " the GPU renderer returns per pixel; the CPU renderer returns them all");
+      auto& pixel = runs[static_cast<std::size_t>(y0 + y) * width + x0 + x];
+      for (int r = 0; r < count; ++r) {
+        const float* depth = p + 4 * (1 + 2 * r);
+        const float* rgba = depth + 4;
+        RayRun run;
+        run.entry_depth = static_cast<float>(depth[0] * frame.scale);
+        run.exit_depth = static_cast<float>(depth[1] * frame.scale);
+        for (int c = 0; c < 4; ++c) run.rgba[c] = rgba[c];
+        pixel.push_back(run);
+      }
+    }
+}
 
 void GpuRayCaster::Impl::allocate(const GlApi& gl, Binding b, std::size_t bytes, const void* data) {
   bytes = std::max<std::size_t>(bytes, 16);  // an empty storage buffer cannot be bound
@@ -173,6 +206,15 @@ GpuRayCaster::~GpuRayCaster() {
 
 Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) {
+  RenderOutput out;
+  RenderOptions image_only = options;
+  image_only.ray_runs = false;
+  render(scalars, tf, camera, image_only, out);
+  return std::move(out.image);
+}
+
+void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
+                          const RenderOptions& options, RenderOutput& out) {
   Impl& m = *m_impl;
   detail::check_frame_inputs("GpuRayCaster::render", *m.mesh, scalars, tf, camera, options);
   const double opacity = options.early_termination_opacity;
@@ -188,7 +230,11 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   const std::size_t tf_bytes = table.data.size() * sizeof(float);
   if (m.capacity[kTf] < tf_bytes) m.allocate(gl, kTf, tf_bytes, nullptr);
   gl.NamedBufferSubData(m.buffers[kTf], 0, static_cast<GLsizeiptr>(tf_bytes), table.data.data());
-  const int tile_w = std::min(camera.width, kTile), tile_h = std::min(camera.height, kTile);
+  const bool with_runs = options.ray_runs;
+  const int tile_side = with_runs ? kRunsTile : kTile;
+  const int tile_w = std::min(camera.width, tile_side), tile_h = std::min(camera.height, tile_side);
+  const std::size_t runs_bytes = with_runs ? static_cast<std::size_t>(tile_w) * tile_h * kRunSlots * 16 : 16;
+  if (m.capacity[kRuns] < runs_bytes) m.allocate(gl, kRuns, runs_bytes, nullptr);
   const std::size_t tile_bytes = static_cast<std::size_t>(tile_w) * tile_h * 4 * sizeof(float);
   if (m.capacity[kPixels] < tile_bytes) m.allocate(gl, kPixels, tile_bytes, nullptr);
   const Shading& shading = options.shading;
@@ -203,7 +249,7 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   } else if (m.capacity[kLight] == 0) {
     m.allocate(gl, kLight, 16, nullptr);  // bound but unread
   }
-  m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels] + m.capacity[kLight];
+  m.stats.frame_bytes = m.capacity[kTf] + m.capacity[kPixels] + m.capacity[kLight] + m.capacity[kRuns];
   for (GLuint b = 0; b < kBindingCount; ++b) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, b, m.buffers[b]);
 
   // The camera of Camera::primary_ray, in the mesh's frame like the points.
@@ -238,6 +284,7 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   gl.ProgramUniform1i(program, m.uniform(gl, "u_breakpoint_count"), table.breakpoint_count);
   const int model = shading.model == LightingModel::none ? 0 : (shading.model == LightingModel::phong ? 1 : 2);
   gl.ProgramUniform1i(program, m.uniform(gl, "u_shading"), model);
+  gl.ProgramUniform1i(program, m.uniform(gl, "u_runs"), with_runs ? 1 : 0);
   gl.ProgramUniform4f(program, m.uniform(gl, "u_phong"), static_cast<float>(shading.ambient),
                       static_cast<float>(shading.diffuse), static_cast<float>(shading.specular),
                       static_cast<float>(shading.shininess));
@@ -246,8 +293,10 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
   u3("u_to_light", dl > 0 ? shading.light_direction / dl : Vec3d{0, 0, 1});
   gl.UseProgram(program);
 
-  Image image(camera.width, camera.height);
-  std::vector<float> tile(static_cast<std::size_t>(tile_w) * tile_h * 4);
+  Image& image = out.image;
+  image = Image(camera.width, camera.height);
+  detail::PixelRuns runs(with_runs ? static_cast<std::size_t>(camera.width) * camera.height : 0);
+  std::vector<float> tile(static_cast<std::size_t>(tile_w) * tile_h * 4), tile_runs;
   for (int y0 = 0; y0 < camera.height; y0 += tile_h)
     for (int x0 = 0; x0 < camera.width; x0 += tile_w) {
       const int w = std::min(tile_w, camera.width - x0), h = std::min(tile_h, camera.height - y0);
@@ -261,24 +310,18 @@ Image GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
       for (int y = 0; y < h; ++y)
         std::memcpy(image.pixel(x0, y0 + y), &tile[static_cast<std::size_t>(y) * w * 4],
                     static_cast<std::size_t>(w) * 4 * sizeof(float));
+      if (with_runs) m.read_runs(gl, x0, y0, w, h, camera.width, tile_runs, runs);
     }
   gl.UseProgram(0);
   const GLenum err = gl.GetError();
   if (err != GL_NO_ERROR)
     throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
                 "GpuRayCaster::render: OpenGL reported " + gpu::gl_error_text(err));
-  return image;
+  out.runs = with_runs ? detail::flatten_runs(runs) : RayRuns{};
 }
 
 GpuMemoryStats GpuRayCaster::memory() const { return m_impl->stats; }
 std::size_t GpuRayCaster::last_scalar_upload_bytes() const { return m_impl->last_upload; }
-void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
-                          const RenderOptions& options, RenderOutput& out) {
-  require(!options.ray_runs, "GpuRayCaster::render: ray runs (RenderOptions::ray_runs) are computed by the CPU renderer only");
-  out.image = render(scalars, tf, camera, options);
-  out.runs = {};
-}
-
 const TetMesh& GpuRayCaster::mesh() const { return *m_impl->mesh; }
 const GpuDevice& GpuRayCaster::device() const { return *m_impl->device; }
 

@@ -83,8 +83,8 @@ public:
   /// As CpuRayCaster::render.
   Image render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                const RenderOptions& options = {});
-  /// Ray runs (RenderOptions::ray_runs) are not computed on the GPU yet: asking for them throws
-  /// Error(invalid_argument); the CPU renderer computes them.
+  /// With RenderOptions::ray_runs, up to 16 runs per pixel: a pixel with more throws
+  /// Error(invalid_argument) naming it (the CPU renderer returns them all).
   void render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
               const RenderOptions& options, RenderOutput& out) override;
 
