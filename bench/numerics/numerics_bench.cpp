@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "bench_util.h"
-#include "occlusion_lighting.h"
+#include "penumbra/render/occlusion.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/render/cpu_ray_caster.h"
@@ -114,7 +114,7 @@ Frame render(const Path& path, const Inputs& in, const std::shared_ptr<pr::GpuDe
   const bool gpu = path.backend == "gpu";
   pr::RenderOptions options;
   std::unique_ptr<pr::LightVolume> volume;
-  std::unique_ptr<penumbra::insitu::OcclusionLighting> occlusion;
+  std::unique_ptr<penumbra::render::OcclusionLighting> occlusion;
   Frame out;
   pb::Stopwatch light_clock;
   if (path.lighting == "light-volume") {
@@ -132,7 +132,7 @@ Frame render(const Path& path, const Inputs& in, const std::shared_ptr<pr::GpuDe
     penumbra::insitu::OcclusionConfig config;
     config.grid_resolution = 64;
     config.volume_resolution = 32;
-    occlusion = std::make_unique<penumbra::insitu::OcclusionLighting>(in.mesh, config, in.lights, gpu ? device : nullptr);
+    occlusion = std::make_unique<penumbra::render::OcclusionLighting>(in.mesh, config, in.lights, gpu ? device : nullptr);
     occlusion->set_field(in.scalars, in.tf);
     options.shading.model = pr::LightingModel::light_volume;
     options.shading.light_rgb = &occlusion->light_rgb(in.camera.eye);

@@ -62,11 +62,11 @@
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 #include "penumbra/render/cpu_ray_caster.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 #include "scene.h"
 #include "scene_views.h"
 

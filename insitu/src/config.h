@@ -62,24 +62,9 @@ struct TriggerConfig {
   double every_time = 0.0;        ///< 0 = not used
 };
 
-/// Where cone tracing is evaluated: at every mesh point (per camera), on a pre-illumination grid
-/// sampled at the points, or at every sample of every ray (image space).
-enum class OcclusionSpace { points, volume, image };
-
 /// Cone-traced directional occlusion and shadows (insitu/README.md, "lighting.occlusion").
-struct OcclusionConfig {
-  double aperture_deg = 30.0;  ///< occlusion cones towards the viewer
-  int splits = 3;              ///< 1, 3 or 7
-  int grid_resolution = 128;   ///< extinction grid nodes along the longest side
-  double attenuation = 1.0;    ///< global alpha
-  OcclusionSpace space = OcclusionSpace::points;
-  int volume_resolution = 64;
-  bool shadows = true;         ///< narrow cones towards each light
-  double shadow_aperture_deg = 2.0;
-  int shadow_splits = 1;
-  /// Pyramid level a cone section reads: continuous (default) or the thesis's whole levels.
-  render::LevelSelection level = render::LevelSelection::continuous;
-};
+using OcclusionConfig = render::OcclusionSettings;
+using render::OcclusionSpace;
 
 /// How rendered samples are lit (insitu/README.md, "lighting").
 struct LightingConfig {

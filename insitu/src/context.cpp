@@ -18,7 +18,7 @@
 #include "field_store.h"
 #include "view_cameras.h"
 #include "image_writer.h"
-#include "occlusion_lighting.h"
+#include "penumbra/render/occlusion.h"
 #include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/camera.h"
@@ -175,7 +175,7 @@ struct Context::PreparedMesh {
   /// kept across steps so that each step's light starts from the previous one.
   std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
   /// Likewise for lighting model "occlusion".
-  std::vector<std::unique_ptr<OcclusionLighting>> occlusions;
+  std::vector<std::unique_ptr<render::OcclusionLighting>> occlusions;
 };
 
 Context::Context(Config config)
@@ -327,11 +327,11 @@ std::unique_ptr<render::Renderer> Context::make_renderer(const std::shared_ptr<c
   return std::make_unique<render::CpuRayCaster>(tets);
 }
 
-OcclusionLighting& Context::occlusion_of(std::size_t index) {
+render::OcclusionLighting& Context::occlusion_of(std::size_t index) {
   auto& occ = m_mesh->occlusions;
   if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
   if (!occ[index])  // cones traced on the GPU when it renders
-    occ[index] = std::make_unique<OcclusionLighting>(m_mesh->tets, m_config.lighting->occlusion, m_config.lighting->lights,
+    occ[index] = std::make_unique<render::OcclusionLighting>(m_mesh->tets, m_config.lighting->occlusion, m_config.lighting->lights,
                                                      m_mesh->on_gpu ? process_gpu_device(false) : nullptr);
   return *occ[index];
 }
@@ -382,7 +382,7 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
     // Occlusion looks towards the viewer: one light field per camera (or, in image space, a
     // light evaluated along every ray).
     if (occlusion) {
-      OcclusionLighting& occ = *m_mesh->occlusions[index];
+      render::OcclusionLighting& occ = *m_mesh->occlusions[index];
       if (m_config.lighting->occlusion.space == OcclusionSpace::image) {
         options.shading.light_at = occ.light_at(camera.eye);
       } else {

@@ -15,6 +15,7 @@
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/mesh_view.h"
 #include "penumbra/render/light_volume.h"
+#include "penumbra/render/occlusion.h"
 #include "penumbra/render/renderer.h"
 #include "step_stages.h"
 #include "trigger.h"
@@ -22,7 +23,6 @@
 namespace penumbra::insitu {
 
 class FieldStore;
-class OcclusionLighting;
 
 /// What the last rendering step did, for diagnostics and examples.
 struct StepStats {
@@ -110,7 +110,7 @@ private:
   /// that the GPU cannot hold the mesh).
   std::unique_ptr<render::Renderer> make_renderer(const std::shared_ptr<const render::TetMesh>& tets) const;
   /// Field `index`'s lighting state, made at its first step and kept across steps.
-  OcclusionLighting& occlusion_of(std::size_t index);
+  render::OcclusionLighting& occlusion_of(std::size_t index);
   render::LightVolume& light_volume_of(std::size_t index);
   /// Prepare stage: the field's lighting for this step (light volume updated within its budget,
   /// occlusion volume set), as the options every camera renders with.

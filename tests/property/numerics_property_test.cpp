@@ -159,12 +159,12 @@ std::vector<Path> paths() {
   std::vector<Path> out = {{"cpu unlit", false, test::render_cpu},
                            {"cpu phong", false, phong(false)},
                            {"cpu light volume", false, test::light_volume(false, render::LightSolveMode::two_level, 0.4)},
-                           {"cpu occlusion", false, test::occlusion(false, insitu::OcclusionSpace::points)}};
+                           {"cpu occlusion", false, test::occlusion(false, render::OcclusionSpace::points)}};
   if (render::gpu_backend_compiled()) {
     out.push_back({"gpu unlit", true, test::render_gpu});
     out.push_back({"gpu phong", true, phong(true)});
     out.push_back({"gpu light volume", true, test::light_volume(true, render::LightSolveMode::two_level, 0.4)});
-    out.push_back({"gpu occlusion", true, test::occlusion(true, insitu::OcclusionSpace::points)});
+    out.push_back({"gpu occlusion", true, test::occlusion(true, render::OcclusionSpace::points)});
   }
   return out;
 }

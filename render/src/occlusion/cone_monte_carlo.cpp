@@ -13,7 +13,7 @@
 
 #include "penumbra/core/error.h"
 #include "penumbra/render/light_volume.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 
 namespace penumbra::render {
 

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "penumbra/core/error.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 #include "shader_constants.h"
 
 namespace penumbra::render {

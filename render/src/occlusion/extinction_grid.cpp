@@ -11,7 +11,7 @@
 #include "../lighting/extinction_table.h"
 #include "../lighting/level0_grid.h"
 #include "penumbra/core/error.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 
 namespace penumbra::render {
 

@@ -22,7 +22,7 @@
 
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 #include "pyramid_filter_taps.h"
 
 namespace penumbra::render {

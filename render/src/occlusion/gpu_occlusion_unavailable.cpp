@@ -3,7 +3,7 @@
 // (PNB_ENABLE_EGL=OFF): every entry point reports Error(backend_unavailable), so callers need no
 // #ifdefs.
 #include "penumbra/core/error.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 
 namespace penumbra::render {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "node_grid.h"
 #include "penumbra/core/error.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 
 namespace penumbra::render {
 

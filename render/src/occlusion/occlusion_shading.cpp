@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 
 namespace penumbra::render {
 

@@ -7,7 +7,7 @@
 #include "node_grid.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 
 namespace penumbra::render {
 

@@ -19,7 +19,7 @@
 
 #include "occlusion_test_util.h"
 #include "penumbra/core/error.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 
 namespace penumbra::occlusion_test {
 namespace {

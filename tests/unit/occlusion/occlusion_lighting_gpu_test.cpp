@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_lighting_gpu_test.cpp -- the in-situ light field of lighting model
-// "occlusion" (insitu/src/occlusion_lighting.h) with its cones traced on the GPU, against the
+// "occlusion" (render::OcclusionLighting, penumbra/render/occlusion.h) with its cones traced on the GPU, against the
 // same object on the CPU: spaces "points" and "volume", occlusion times two coloured lights, two
 // steps (the pyramid is re-uploaded) and two eyes (the mesh points are uploaded once).
 //
@@ -15,7 +15,7 @@
 #include "cinema_database.h"
 #include "config.h"
 #include "context.h"
-#include "occlusion_lighting.h"
+#include "penumbra/render/occlusion.h"
 #include "occlusion_test_util.h"
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
@@ -32,12 +32,12 @@ TEST(OcclusionLightingGpu, LightFieldMatchesTheCpuInBothSpaces) {
   const auto mesh = tet_block(10, {0, 0, 0}, {2, 1, 1});
   const std::vector<Light> lights = {{Light::Kind::directional, {-1, 0.3, -0.5}, {1.0, 0.9, 0.8}},
                                      {Light::Kind::point, {2.5, 0.5, 1.5}, {0.3, 0.4, 0.6}}};
-  for (insitu::OcclusionSpace space : {insitu::OcclusionSpace::points, insitu::OcclusionSpace::volume}) {
-    insitu::OcclusionConfig config;
+  for (render::OcclusionSpace space : {render::OcclusionSpace::points, render::OcclusionSpace::volume}) {
+    render::OcclusionSettings config;
     config.grid_resolution = 32;
     config.volume_resolution = 12;
     config.space = space;
-    insitu::OcclusionLighting cpu(mesh, config, lights), gpu(mesh, config, lights, device);
+    render::OcclusionLighting cpu(mesh, config, lights), gpu(mesh, config, lights, device);
     double worst = 0, darkest = 3;
     for (double radius : {0.3, 0.45}) {  // two steps
       const auto scalars = field(*mesh, [&](const Vec3d& x) { return length(x - Vec3d{1.1, 0.5, 0.5}); });
@@ -55,7 +55,7 @@ TEST(OcclusionLightingGpu, LightFieldMatchesTheCpuInBothSpaces) {
       }
     }
     std::printf("[gpu-occlusion-lighting] space %s: max |GPU - CPU| = %.2e (darkest %.3f)\n",
-                space == insitu::OcclusionSpace::points ? "points" : "volume", worst, darkest);
+                space == render::OcclusionSpace::points ? "points" : "volume", worst, darkest);
     EXPECT_LT(worst, 3e-4);
     EXPECT_LT(darkest, 0.2);  // the ball occludes and shadows: not a comparison of constants
   }

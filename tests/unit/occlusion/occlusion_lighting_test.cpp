@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_lighting_test.cpp -- the in-situ light field of lighting model
-// "occlusion" (insitu/src/occlusion_lighting.h) on the CPU against the exact shadow
+// "occlusion" (render::OcclusionLighting, penumbra/render/occlusion.h) on the CPU against the exact shadow
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
 #include "config.h"
-#include "occlusion_lighting.h"
+#include "penumbra/render/occlusion.h"
 #include "occlusion_test_util.h"
 
 namespace penumbra::occlusion_test {
@@ -22,13 +22,13 @@ TEST(OcclusionLighting, ShadowsIncludeTheMediumNextToThePoint) {
   const double tau = 2.0;
   const std::vector<Light> lights = {{Light::Kind::directional, {0, 0, -1}, {1, 1, 1}}};
   const auto scalars = field(*mesh, [](const Vec3d&) { return 0.0; });
-  for (insitu::OcclusionSpace space : {insitu::OcclusionSpace::points, insitu::OcclusionSpace::volume,
-                                       insitu::OcclusionSpace::image}) {
-    insitu::OcclusionConfig config;
+  for (render::OcclusionSpace space : {render::OcclusionSpace::points, render::OcclusionSpace::volume,
+                                       render::OcclusionSpace::image}) {
+    render::OcclusionSettings config;
     config.grid_resolution = 32;
     config.volume_resolution = 16;
     config.space = space;
-    insitu::OcclusionLighting lighting(mesh, config, lights);
+    render::OcclusionLighting lighting(mesh, config, lights);
     lighting.set_field(scalars, constant_tf(tau));
     const Vec3d eye{0.5, 0.5, -100};
     const std::vector<float>& rgb = lighting.light_rgb(eye);
@@ -39,7 +39,7 @@ TEST(OcclusionLighting, ShadowsIncludeTheMediumNextToThePoint) {
       const Vec3d& x = mesh->points[p];
       if (x.z != 0.0 || x.x < 0.2 || x.x > 0.8 || x.y < 0.2 || x.y > 0.8) continue;
       double v = rgb[3 * p];
-      if (space == insitu::OcclusionSpace::image) {
+      if (space == render::OcclusionSpace::image) {
         double c[3];
         at(x, c);
         v = c[0];

@@ -1,25 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/occlusion/occlusion_renderer.h -- a scene lit by the in-situ occlusion lighting
-// (insitu/src/occlusion_lighting.h) as a renderer of the invariance and property tests
+// (render::OcclusionLighting, penumbra/render/occlusion.h) as a renderer of the invariance and property tests
 #pragma once
 #include "invariance.h"
-#include "occlusion_lighting.h"
+#include "penumbra/render/occlusion.h"
 
 namespace penumbra::test {
 
 /// Occlusion towards the camera's eye and shadows towards the scene's lights, in `space`, with
 /// cones traced on the GPU device or the CPU; the frame ray cast by the caster of that backend.
-inline Renderer occlusion(bool gpu, insitu::OcclusionSpace space) {
+inline Renderer occlusion(bool gpu, render::OcclusionSpace space) {
   return [=](const std::shared_ptr<const render::TetMesh>& mesh, const Scene& s) {
-    insitu::OcclusionConfig config;
+    render::OcclusionSettings config;
     config.grid_resolution = 32;
     config.volume_resolution = 16;
     config.space = space;
-    insitu::OcclusionLighting lighting(mesh, config, s.lights, gpu ? device() : nullptr);
+    render::OcclusionLighting lighting(mesh, config, s.lights, gpu ? device() : nullptr);
     lighting.set_field(s.scalars, s.tf);
     Scene lit = s;
     lit.options.shading.model = render::LightingModel::light_volume;
-    if (space == insitu::OcclusionSpace::image) {
+    if (space == render::OcclusionSpace::image) {
       lit.options.shading.light_at = lighting.light_at(s.camera.eye);
       return render_cpu(mesh, lit);
     }

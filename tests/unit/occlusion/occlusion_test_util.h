@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "fixtures/meshes.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 #include "penumbra/render/tet_mesh.h"
 
 namespace penumbra::occlusion_test {

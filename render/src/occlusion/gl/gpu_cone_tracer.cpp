@@ -18,7 +18,7 @@
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/local_frame.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 
 namespace penumbra::render {
 namespace gpu {

@@ -17,7 +17,7 @@
 #include "occlusion/pyramid_filter_taps.h"
 #include "occlusion_gl_util.h"
 #include "penumbra/core/error.h"
-#include "penumbra/render/gpu_occlusion.h"
+#include "occlusion/gpu_occlusion.h"
 
 namespace penumbra::render {
 namespace gpu {

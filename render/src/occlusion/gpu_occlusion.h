@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// render/include/penumbra/render/gpu_occlusion.h -- Gaussian cone tracing on a GPU (OpenGL 4.5
+// render/src/occlusion/gpu_occlusion.h -- Gaussian cone tracing on a GPU (OpenGL 4.5
 // compute shaders), for many query points per dispatch
 //
 // The same algorithm as ConeTracer (penumbra/render/occlusion.h): the pyramid levels and the
@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "penumbra/render/gpu_ray_caster.h"
-#include "penumbra/render/occlusion.h"
+#include "occlusion/occlusion_internals.h"
 
 namespace penumbra::render {
 

@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// insitu/src/occlusion_lighting.cpp -- cone-traced occlusion and shadows as a per-point light field
-#include "occlusion_lighting.h"
+// render/src/occlusion/occlusion_lighting.cpp -- cone-traced occlusion and shadows as a per-point
+// light field
+#include "penumbra/render/occlusion.h"
 
-namespace penumbra::insitu {
+#include "occlusion/gpu_occlusion.h"
+#include "occlusion/occlusion_internals.h"
+
+namespace penumbra::render {
 namespace {
 
 render::ShadowLight shadow_light(const render::Light& l) {
@@ -15,15 +19,51 @@ render::ShadowLight shadow_light(const render::Light& l) {
 
 }  // namespace
 
-OcclusionLighting::OcclusionLighting(std::shared_ptr<const render::TetMesh> mesh, const OcclusionConfig& config,
-                                     std::vector<render::Light> lights, std::shared_ptr<render::GpuDevice> gpu)
-    : m_mesh(std::move(mesh)),
-      m_config(config),
-      m_lights(std::move(lights)),
-      m_resampler(m_mesh, config.grid_resolution),
-      m_gpu(std::move(gpu)) {}
+struct OcclusionLighting::Impl {
+  Impl(std::shared_ptr<const TetMesh> mesh, const OcclusionSettings& config, std::vector<Light> lights,
+       std::shared_ptr<GpuDevice> gpu)
+      : m_mesh(std::move(mesh)),
+        m_config(config),
+        m_lights(std::move(lights)),
+        m_resampler(m_mesh, config.grid_resolution),
+        m_gpu(std::move(gpu)) {}
+  void set_field(const std::vector<float>& scalars, const TransferFunction& tf);
+  const std::vector<float>& light_rgb(const Vec3d& eye);
+  std::function<void(const Vec3d&, double[3])> light_at(const Vec3d& eye) const;
 
-void OcclusionLighting::set_field(const std::vector<float>& scalars, const render::TransferFunction& tf) {
+  std::shared_ptr<const TetMesh> m_mesh;
+  OcclusionSettings m_config;
+  std::vector<Light> m_lights;
+  ExtinctionResampler m_resampler;
+  ExtinctionPyramid m_pyramid;
+  std::unique_ptr<ConeTracer> m_ao_tracer, m_shadow_tracer;
+  // Exact depth over the shadow cones' gap (built on the first step with shadows: a BVH per mesh).
+  std::unique_ptr<GapDepth> m_gap_depth;
+  // The GPU path (null without a device); declared after m_pyramid, which they point to.
+  std::shared_ptr<GpuDevice> m_gpu;
+  std::unique_ptr<GpuExtinctionPyramid> m_gpu_pyramid;
+  std::unique_ptr<GpuConeTracer> m_gpu_ao, m_gpu_shadow;
+  std::vector<float> m_shadow_rgb;  ///< sum_k colour_k shadow_k per point, 3 per point; empty: white
+  std::vector<float> m_rgb;
+};
+
+OcclusionLighting::OcclusionLighting(std::shared_ptr<const TetMesh> mesh, const OcclusionSettings& settings,
+                                     std::vector<Light> lights, std::shared_ptr<GpuDevice> gpu)
+    : m_impl(std::make_unique<Impl>(std::move(mesh), settings, std::move(lights), std::move(gpu))) {}
+
+OcclusionLighting::~OcclusionLighting() = default;
+
+void OcclusionLighting::set_field(const std::vector<float>& scalars, const TransferFunction& tf) {
+  m_impl->set_field(scalars, tf);
+}
+
+const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) { return m_impl->light_rgb(eye); }
+
+std::function<void(const Vec3d&, double[3])> OcclusionLighting::light_at(const Vec3d& eye) const {
+  return m_impl->light_at(eye);
+}
+
+void OcclusionLighting::Impl::set_field(const std::vector<float>& scalars, const TransferFunction& tf) {
   m_gpu_ao.reset();
   m_gpu_shadow.reset();
   m_ao_tracer.reset();
@@ -69,7 +109,7 @@ void OcclusionLighting::set_field(const std::vector<float>& scalars, const rende
   }
 }
 
-const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) {
+const std::vector<float>& OcclusionLighting::Impl::light_rgb(const Vec3d& eye) {
   const render::ConeTracer& tracer = *m_ao_tracer;
   auto occlusion = [&](const Vec3d& x) { return render::directional_occlusion(tracer, x, eye); };
   std::vector<float> factor;
@@ -91,7 +131,7 @@ const std::vector<float>& OcclusionLighting::light_rgb(const Vec3d& eye) {
   return m_rgb;
 }
 
-std::function<void(const Vec3d&, double[3])> OcclusionLighting::light_at(const Vec3d& eye) const {
+std::function<void(const Vec3d&, double[3])> OcclusionLighting::Impl::light_at(const Vec3d& eye) const {
   return [this, eye](const Vec3d& x, double rgb[3]) {
     const double ao = render::directional_occlusion(*m_ao_tracer, x, eye);
     double light[3] = {1, 1, 1};
@@ -106,4 +146,4 @@ std::function<void(const Vec3d&, double[3])> OcclusionLighting::light_at(const V
   };
 }
 
-}  // namespace penumbra::insitu
+}  // namespace penumbra::render
