@@ -23,6 +23,32 @@ std::shared_ptr<const render::TetMesh> hole_block() {
   return mesh;
 }
 
+/// The process's GPU device, or null where none opens.
+std::shared_ptr<render::GpuDevice> gpu_device() {
+  if (!render::gpu_backend_compiled()) return nullptr;
+  try {
+    return render::GpuDevice::open();
+  } catch (const Error&) {
+    return nullptr;
+  }
+}
+
+/// A smooth field in [0, 1] over the mesh, varying along x and z.
+std::vector<float> wavy_field(const render::TetMesh& mesh) {
+  std::vector<float> scalars(mesh.points.size());
+  for (std::size_t i = 0; i < scalars.size(); ++i)
+    scalars[i] = static_cast<float>(0.5 + 0.5 * std::sin(7 * mesh.points[i].x + 3 * mesh.points[i].z));
+  return scalars;
+}
+
+/// Blue and thin at 0, yellow and dense at 1.
+render::TransferFunction two_colour_tf() {
+  render::TransferFunction tf;
+  tf.colors = {{0.0, 0.1, 0.3, 0.9}, {1.0, 1.0, 0.6, 0.1}};
+  tf.opacities = {{0.0, 0.5}, {1.0, 6.0}};
+  return tf;
+}
+
 /// Pixel (x, y)'s runs composited front to back, in double: premultiplied RGB and alpha.
 std::array<double, 4> composite(const render::RayRuns& runs, std::size_t pixel) {
   std::array<double, 4> out{0, 0, 0, 0};
@@ -68,12 +94,8 @@ TEST(RayRuns, ARayAcrossTheHoleHasTwoRunsAtTheFacesDepths) {
 TEST(RayRuns, CompositedRunsGiveTheImage) {
   const auto mesh = hole_block();
   render::CpuRayCaster caster(mesh);
-  std::vector<float> scalars(mesh->points.size());
-  for (std::size_t i = 0; i < scalars.size(); ++i)
-    scalars[i] = static_cast<float>(0.5 + 0.5 * std::sin(7 * mesh->points[i].x + 3 * mesh->points[i].z));
-  render::TransferFunction tf;
-  tf.colors = {{0.0, 0.1, 0.3, 0.9}, {1.0, 1.0, 0.6, 0.1}};
-  tf.opacities = {{0.0, 0.5}, {1.0, 6.0}};
+  const std::vector<float> scalars = wavy_field(*mesh);
+  const render::TransferFunction tf = two_colour_tf();
   for (const bool phong : {false, true}) {
     render::RenderOptions options;
     options.ray_runs = true;
@@ -119,22 +141,13 @@ TEST(RayRuns, TheImageIsTheSameWithOrWithoutRuns) {
 // frame: 1e-5 of the depth; colours within a tenth of an 8-bit level), and its runs composite to
 // its own image.
 TEST(RayRuns, TheGpuRendererReturnsTheCpuRuns) {
-  if (!render::gpu_backend_compiled()) GTEST_SKIP() << "built without the GPU backend";
-  std::shared_ptr<render::GpuDevice> device;
-  try {
-    device = render::GpuDevice::open();
-  } catch (const Error& e) {
-    GTEST_SKIP() << e.what();
-  }
+  const std::shared_ptr<render::GpuDevice> device = gpu_device();
+  if (!device) GTEST_SKIP() << "no GPU device (or built without the GPU backend)";
   const auto mesh = hole_block();
   render::GpuRayCaster gpu(device, mesh);
   render::CpuRayCaster cpu(mesh);
-  std::vector<float> scalars(mesh->points.size());
-  for (std::size_t i = 0; i < scalars.size(); ++i)
-    scalars[i] = static_cast<float>(0.5 + 0.5 * std::sin(7 * mesh->points[i].x + 3 * mesh->points[i].z));
-  render::TransferFunction tf;
-  tf.colors = {{0.0, 0.1, 0.3, 0.9}, {1.0, 1.0, 0.6, 0.1}};
-  tf.opacities = {{0.0, 0.5}, {1.0, 6.0}};
+  const std::vector<float> scalars = wavy_field(*mesh);
+  const render::TransferFunction tf = two_colour_tf();
   render::RenderOptions options;
   options.ray_runs = true;
   const auto camera = render::Camera::orbit(mesh->bounds, 30, 10, 30, 40, 32);
@@ -179,13 +192,8 @@ TEST(RayRuns, MoreRunsThanTheGpuHoldsAreRefusedWithThePixel) {
   cpu.render(scalars, test::constant_tf(0.1), camera, options, out);
   const std::size_t centre = 4 * 9 + 4;
   EXPECT_EQ(out.runs.offsets[centre + 1] - out.runs.offsets[centre], 20u);
-  if (!render::gpu_backend_compiled()) GTEST_SKIP() << "built without the GPU backend";
-  std::shared_ptr<render::GpuDevice> device;
-  try {
-    device = render::GpuDevice::open();
-  } catch (const Error& e) {
-    GTEST_SKIP() << e.what();
-  }
+  const std::shared_ptr<render::GpuDevice> device = gpu_device();
+  if (!device) GTEST_SKIP() << "no GPU device (or built without the GPU backend)";
   render::GpuRayCaster gpu(device, slabs);
   try {
     gpu.render(scalars, test::constant_tf(0.1), camera, options, out);
