@@ -129,10 +129,10 @@ Frame render(const Path& path, const Inputs& in, const std::shared_ptr<pr::GpuDe
     options.shading.model = pr::LightingModel::light_volume;
     options.shading.light_rgb = &volume->light_rgb();
   } else if (path.lighting == "occlusion") {
-    penumbra::insitu::OcclusionConfig config;
+    pr::OcclusionSettings config;
     config.grid_resolution = 64;
     config.volume_resolution = 32;
-    occlusion = std::make_unique<penumbra::render::OcclusionLighting>(in.mesh, config, in.lights, gpu ? device : nullptr);
+    occlusion = std::make_unique<pr::OcclusionLighting>(in.mesh, config, in.lights, gpu ? device : nullptr);
     occlusion->set_field(in.scalars, in.tf);
     options.shading.model = pr::LightingModel::light_volume;
     options.shading.light_rgb = &occlusion->light_rgb(in.camera.eye);
