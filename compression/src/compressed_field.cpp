@@ -56,20 +56,27 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
   const std::uint64_t size = std::uint64_t(st.st_size);
   f->m_file_bytes = size;
 
-  // Header.
+  const std::uint32_t header_bytes = f->read_header();
+  if (!f->read_index(header_bytes)) f->recover_pages(header_bytes, options);
+  return f;
+}
+
+std::uint32_t CompressedField::read_header() {
+  const std::string& path = m_path;
+  const std::uint64_t size = m_file_bytes;
   if (size < detail::kHeaderFixedBytes + 4)
     fail(path, "truncated inside the file header (" + std::to_string(size) + " bytes)");
   std::uint8_t fixed[detail::kHeaderFixedBytes];
-  read_at(f->m_fd, path, 0, fixed, sizeof fixed, "file header");
+  read_at(m_fd, path, 0, fixed, sizeof fixed, "file header");
   if (std::memcmp(fixed, detail::kFileMagic, 8) != 0) fail(path, "not a Penumbra compressed field (bad magic)");
   detail::ByteReader hr(fixed + 8, sizeof fixed - 8, "compressed field '" + path + "': file header");
   const auto version = hr.get<std::uint32_t>();
   if (version < 1 || version > std::uint32_t(kContainerFormatVersion))
     fail(path, "format version " + std::to_string(version) + " is not supported (this build reads 1 to " +
                    std::to_string(kContainerFormatVersion) + ")");
-  f->m_version = version;
+  m_version = version;
   const auto header_bytes = hr.get<std::uint32_t>();
-  FieldInfo& info = f->m_info;
+  FieldInfo& info = m_info;
   info.vertex_count = hr.get<std::uint64_t>();
   info.window = hr.get<std::uint32_t>();
   info.codebook_size = hr.get<std::uint32_t>();
@@ -80,7 +87,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
     fail(path, "file header is corrupt (name length)");
   if (size < header_bytes) fail(path, "truncated inside the file header (" + std::to_string(size) + " bytes)");
   std::vector<std::uint8_t> header(header_bytes);
-  read_at(f->m_fd, path, 0, header.data(), header_bytes, "file header");
+  read_at(m_fd, path, 0, header.data(), header_bytes, "file header");
   std::uint32_t header_crc;
   std::memcpy(&header_crc, header.data() + header_bytes - 4, 4);
   if (header_crc != detail::crc32(header.data(), header_bytes - 4)) fail(path, "file header checksum mismatch");
@@ -89,11 +96,16 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       std::uint32_t(info.bound.kind) > 2)
     fail(path, "file header holds invalid parameters");
 
-  // Index trailer: present and consistent, or the file did not finish.
+  return header_bytes;
+}
+
+bool CompressedField::read_index(std::uint32_t header_bytes) {
+  const std::string& path = m_path;
+  const std::uint64_t size = m_file_bytes;
   bool complete = false;
   if (size >= header_bytes + detail::kTailBytes) {
     std::uint8_t tail[detail::kTailBytes];
-    read_at(f->m_fd, path, size - detail::kTailBytes, tail, sizeof tail, "tail");
+    read_at(m_fd, path, size - detail::kTailBytes, tail, sizeof tail, "tail");
     std::uint64_t index_offset, file_size;
     std::uint32_t index_bytes, tail_crc;
     std::memcpy(&index_offset, tail, 8);
@@ -104,7 +116,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         file_size == size && index_offset >= header_bytes &&
         index_offset + index_bytes + detail::kTailBytes == size) {
       std::vector<std::uint8_t> index(index_bytes);
-      read_at(f->m_fd, path, index_offset, index.data(), index_bytes, "index");
+      read_at(m_fd, path, index_offset, index.data(), index_bytes, "index");
       std::uint32_t index_crc;
       if (index_bytes < 4) fail(path, "index is corrupt");
       std::memcpy(&index_crc, index.data() + index_bytes - 4, 4);
@@ -113,10 +125,10 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
       if (ir.get<std::uint32_t>() != detail::kIndexMagic) ir.fail("bad index magic");
       const auto pages = ir.get<std::uint32_t>();
       const auto steps = ir.get<std::uint64_t>();
-      const bool mapped = f->m_version >= detail::kFirstMappedVersion;
-      f->m_min = mapped ? ir.get<double>() : ir.get<float>();
-      f->m_max = mapped ? ir.get<double>() : ir.get<float>();
-      ir.get_array(f->m_times, steps);
+      const bool mapped = m_version >= detail::kFirstMappedVersion;
+      m_min = mapped ? ir.get<double>() : ir.get<float>();
+      m_max = mapped ? ir.get<double>() : ir.get<float>();
+      ir.get_array(m_times, steps);
       std::uint64_t expect_offset = header_bytes, expect_step = 0;
       for (std::uint32_t i = 0; i < pages; ++i) {
         PageEntry e;
@@ -129,7 +141,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         e.value_max = ir.get<float>();
         e.bound = ir.get<float>();
         ir.get<std::uint32_t>();
-        const bool coded = f->m_version >= detail::kFirstCodedVersion;
+        const bool coded = m_version >= detail::kFirstCodedVersion;
         if (coded) e.payload_bytes = ir.get<std::uint64_t>();
         if (mapped) {
           e.map.offset = ir.get<double>();
@@ -137,21 +149,25 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
         }
         const std::uint64_t min_bytes = detail::PageHeader::kBytes + (coded ? detail::kCodingPrefixBytes : 0);
         if (e.offset != expect_offset || e.first_step != expect_step || e.step_count < 1 ||
-            e.step_count > info.window || e.bytes < min_bytes || std::uint32_t(e.method) > f->max_method() ||
+            e.step_count > m_info.window || e.bytes < min_bytes || std::uint32_t(e.method) > max_method() ||
             !e.map.valid())
           ir.fail("entry of " + page_name(i) + " is inconsistent");
         if (!coded) e.payload_bytes = e.bytes - detail::PageHeader::kBytes;
         expect_offset += e.bytes;
         expect_step += e.step_count;
-        f->m_pages.push_back(e);
+        m_pages.push_back(e);
       }
       if (expect_offset != index_offset || expect_step != steps || ir.remaining() != 0)
         ir.fail("page table does not cover the file");
       complete = true;
     }
   }
-  if (complete) return f;
+  return complete;
+}
 
+void CompressedField::recover_pages(std::uint32_t header_bytes, const OpenOptions& options) {
+  const std::string& path = m_path;
+  const std::uint64_t size = m_file_bytes;
   // No valid index: walk the pages to say where the file ends or breaks, and (if asked)
   // keep the complete, intact pages before that point.
   std::uint64_t pos = header_bytes, next_step = 0;
@@ -165,7 +181,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
     const std::string previous = i ? page_name(i - 1) : std::string("the header");
     std::uint8_t hb[detail::PageHeader::kBytes] = {};
     const std::size_t avail = std::size_t(std::min<std::uint64_t>(size - pos, sizeof hb));
-    read_at(f->m_fd, path, pos, hb, avail, page_name(i));
+    read_at(m_fd, path, pos, hb, avail, page_name(i));
     std::uint32_t magic = 0;
     if (avail >= 4) std::memcpy(&magic, hb, 4);
     if (magic == detail::kIndexMagic) {
@@ -194,25 +210,25 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
     PageEntry e{pos, detail::PageHeader::kBytes + h.payload_bytes, h.first_step, h.step_count,
                 PageMethod(h.method), h.value_min, h.value_max, h.bound, h.payload_bytes, ValueMap{}};
     if (options.recover_incomplete) {
-      if (f->m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
+      if (m_version >= detail::kFirstCodedVersion && h.payload_bytes >= detail::kCodingPrefixBytes) {
         std::uint8_t prefix[detail::kCodingPrefixBytes];
-        read_at(f->m_fd, path, pos + detail::PageHeader::kBytes, prefix, sizeof prefix, page_name(i));
+        read_at(m_fd, path, pos + detail::PageHeader::kBytes, prefix, sizeof prefix, page_name(i));
         e.payload_bytes = detail::declared_payload_bytes(prefix);
       }
       try {
-        f->m_pages.push_back(e);
-        f->m_maps_from_pages = true;  // no index holds this page's map: it is taken from the page
-        const auto page = f->load_page(i);
-        f->m_maps_from_pages = false;
-        f->m_pages.back().map = page->map;
-        f->m_times.insert(f->m_times.end(), page->times.begin(), page->times.end());
+        m_pages.push_back(e);
+        m_maps_from_pages = true;  // no index holds this page's map: it is taken from the page
+        const auto page = load_page(i);
+        m_maps_from_pages = false;
+        m_pages.back().map = page->map;
+        m_times.insert(m_times.end(), page->times.begin(), page->times.end());
         const double lo = page->map.value(page->value_min), hi = page->map.value(page->value_max);
-        if (i == 0) f->m_min = lo, f->m_max = hi;
-        f->m_min = std::min(f->m_min, lo);
-        f->m_max = std::max(f->m_max, hi);
+        if (i == 0) m_min = lo, m_max = hi;
+        m_min = std::min(m_min, lo);
+        m_max = std::max(m_max, hi);
       } catch (const Error& err) {
-        f->m_maps_from_pages = false;
-        f->m_pages.pop_back();
+        m_maps_from_pages = false;
+        m_pages.pop_back();
         problem = err.what();
         break;
       }
@@ -221,8 +237,7 @@ std::shared_ptr<CompressedField> CompressedField::open(const std::string& path, 
     next_step += h.step_count;
   }
   if (!options.recover_incomplete) fail(path, problem);
-  if (f->m_pages.empty()) fail(path, "no complete page to recover: " + problem);
-  return f;
+  if (m_pages.empty()) fail(path, "no complete page to recover: " + problem);
 }
 
 CompressedField::~CompressedField() {

@@ -137,6 +137,13 @@ private:
   std::uint32_t m_version = 0;
   bool m_maps_from_pages = false;  ///< while recovery reads the pages of a file without its index
   std::uint32_t max_method() const;
+  /// Reads and checks the file header; returns its size.
+  std::uint32_t read_header();
+  /// Reads the index trailer; false when the file has none (it did not finish) or a damaged one.
+  bool read_index(std::uint32_t header_bytes);
+  /// Walks the pages of a file without its index to say where it ends or breaks, and with
+  /// OpenOptions::recover_incomplete keeps the complete, intact pages before that point.
+  void recover_pages(std::uint32_t header_bytes, const OpenOptions& options);
 };
 
 }  // namespace penumbra::compression
