@@ -9,7 +9,7 @@
 // corner the light comes from, so every node has s = the light's octant, as on the CPU.
 #version 450
 
-layout(local_size_x = 64) in;
+layout(local_size_x = kLightGroup) in;
 
 layout(std430, binding = 0) readonly buffer Tau { float tau[]; };
 layout(std430, binding = 1) readonly buffer Mask { uint mask_bytes[]; };  // 4 Level0Mask bytes per uint
@@ -25,7 +25,6 @@ uniform vec3 u_w_dir;       // directional: |u_a| / h_a normalised to sum 1
 uniform float u_ds_dir;     // directional: 1 / sum_a |u_a| / h_a
 uniform float u_sigma_a;
 
-const uint kOccluder = 2u;
 
 uint mask_at(int id) { return (mask_bytes[id >> 2] >> (8 * (id & 3))) & 0xffu; }
 int index_of(ivec3 n) { return n.x + u_dims.x * (n.y + u_dims.y * n.z); }
@@ -33,7 +32,7 @@ float flush_small(float v) { return v < 1e-30 ? 0.0 : v; }
 
 void solve_node(ivec3 idx) {
   int id = index_of(idx);
-  if (mask_at(id) == kOccluder) {
+  if (mask_at(id) == kMaskOccluder) {
     rho[id] = 0.0;
     return;
   }

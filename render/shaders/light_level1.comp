@@ -12,7 +12,7 @@
 // Float32 throughout; points and light relative to the mesh centre.
 #version 450
 
-layout(local_size_x = 64) in;
+layout(local_size_x = kLightGroup) in;
 
 layout(std430, binding = 0) readonly buffer Points { vec4 points[]; };  // xyz, w = longest incident edge
 layout(std430, binding = 1) readonly buffer Tets { ivec4 tets[]; };  // walk records (level1_mesh.h)
@@ -48,10 +48,6 @@ uniform int u_breakpoints;    // table: x[n], a[n + 1], b[n + 1] at the start of
 uniform int u_occluders;      // boxes (lo.xyz, hi.xyz) after the table
 uniform int u_occluder_offset;
 
-const int kMaxMoves = 200000;
-const float kGeometricDepth = 1.3862943611198906;
-const float kLinearDepth = 2.772588722239781;
-const uint kOutside = 0u;
 const int kInside = 0, kLeftMesh = 1, kLost = 2;
 
 bool is_nan_bits(float x) { return (floatBitsToUint(x) & 0x7fffffffu) > 0x7f800000u; }
@@ -162,7 +158,7 @@ float sample_level0(vec3 p, bool prefer_outside) {
     float v = rho0[id];
     sum += w * v;
     wsum += w;
-    if (prefer_outside && mask_at(id) == kOutside) {
+    if (prefer_outside && mask_at(id) == kMaskOutside) {
       any_outside = true;
       float wo = max(w, 1e-12);
       sum_out += wo * v;

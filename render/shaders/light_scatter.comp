@@ -10,7 +10,7 @@
 // neighbours (0 without any), so NaN never spreads. The largest change goes to counters[u_slot].
 #version 450
 
-layout(local_size_x = 64) in;
+layout(local_size_x = kLightGroup) in;
 
 layout(std430, binding = 0) readonly buffer Edges { int edges[]; };  // np + 1 offsets, then neighbour ids
 layout(std430, binding = 1) readonly buffer Weights { float weights[]; };

@@ -15,9 +15,21 @@ namespace penumbra::render::shader {
 PNB_SHARED(int, kRayCastTile, 8)         // ray_cast.comp: tiles of kRayCastTile x kRayCastTile pixels
 PNB_SHARED(int, kConeTraceGroup, 64)     // cone_trace.comp
 PNB_SHARED(int, kPyramidFilterGroup, 64)  // pyramid_filter.comp
+PNB_SHARED(int, kLightGroup, 64)          // light_level0.comp, light_level1.comp, light_scatter.comp
 
 // Runs inside the mesh a GPU ray returns at most (RenderOptions::ray_runs).
 PNB_SHARED(int, kMaxRayRuns, 16)
+
+// Level 1 of the light volume (level1_solve.cpp, level1_walk.cpp, light_level1.comp): optical
+// depth is interpolated up to kGeometricDepth across a tet (a factor 4 in rho), rho linearly from
+// kLinearDepth (a factor 16); a walk that takes kMaxMoves steps cycles in a degenerate
+// configuration and falls back to level 0.
+PNB_SHARED(double, kGeometricDepth, 1.3862943611198906)
+PNB_SHARED(double, kLinearDepth, 2.772588722239781)
+PNB_SHARED(int, kMaxMoves, 200000)
+// Level 0's grid mask (render::Level0Mask) as the shaders read it.
+PNB_SHARED(unsigned, kMaskOutside, 0)
+PNB_SHARED(unsigned, kMaskOccluder, 2)
 
 // Cone tracing (cone_tracer.cpp, cone_trace.comp): a depth beyond which exp(-depth) is below
 // float resolution of any shading result, and the depth at which a (sub-)cone counts as opaque

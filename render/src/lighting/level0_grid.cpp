@@ -9,8 +9,13 @@
 #include "penumbra/core/error.h"
 #include "penumbra/core/thread_pool.h"
 #include "tet_geometry.h"
+#include "shader_constants.h"
 
 namespace penumbra::render::lighting {
+
+// The shaders read the mask by these values (shader_constants.h).
+static_assert(static_cast<unsigned>(Level0Mask::outside) == shader::kMaskOutside &&
+              static_cast<unsigned>(Level0Mask::occluder) == shader::kMaskOccluder);
 namespace {
 
 // Affine map from a point to the barycentric coordinates (l1, l2, l3) of a tet; l0 = 1 - sum.

@@ -7,15 +7,17 @@
 
 #include "penumbra/core/elapsed.h"
 #include "penumbra/core/thread_pool.h"
+#include "shader_constants.h"
 #include "tet_geometry.h"
 
 namespace penumbra::render::lighting {
 namespace {
 
 // interpolate_light: optical depth interpolated up to this change across the light within a tet
-// (a factor 4 in rho), rho interpolated linearly from the next (a factor 16).
-constexpr double kGeometricDepth = 1.3862943611198906;
-constexpr double kLinearDepth = 2.772588722239781;
+// (a factor 4 in rho), rho interpolated linearly from the next (a factor 16); shared with
+// light_level1.comp.
+using shader::kGeometricDepth;
+using shader::kLinearDepth;
 
 }  // namespace
 

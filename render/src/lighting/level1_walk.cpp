@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "penumbra/core/thread_pool.h"
+#include "shader_constants.h"
 
 namespace penumbra::render::lighting {
 namespace {
@@ -29,7 +30,7 @@ constexpr double kSnap = 1e-12;
 
 // A walk of one step crosses about step / edge tets; this cap only stops a walk that cycles in
 // a degenerate configuration (it then falls back to level 0 and is counted).
-constexpr int kMaxMoves = 200000;
+using shader::kMaxMoves;
 
 // Rays parallel to a directional light: projections shared by every walk of the light, taken
 // relative to the walk's own start.

@@ -15,6 +15,7 @@
 #include "../light_scattering.h"
 #include "penumbra/core/error.h"
 #include "penumbra/render/gpu_ray_caster.h"
+#include "shader_constants.h"
 
 namespace penumbra::render {
 namespace gpu {
@@ -30,7 +31,7 @@ namespace {
 using gpu::CurrentContext;
 using gpu::GlApi;
 
-constexpr GLuint kGroupSize = 64;      // local_size_x of every kernel
+constexpr GLuint kGroupSize = shader::kLightGroup;  // local_size_x of every kernel
 constexpr int kScatterBatch = 8;       // Jacobi iterations between two residual read-backs
 constexpr GLuint kLevel1Bindings = 13;  // storage blocks of light_level1.comp, the most of the three
 
