@@ -23,6 +23,10 @@
 
 #include <stdint.h>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -154,5 +158,7 @@ const char* pnb_version(void);
 #ifdef __cplusplus
 }
 #endif
+
+PNB_PUBLIC_END
 
 #endif /* PENUMBRA_PENUMBRA_H */

@@ -3,6 +3,10 @@
 #pragma once
 #include <cstdint>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 /// How a maximum error is stated. `range_relative` multiplies the value range of the data
@@ -79,3 +83,5 @@ enum class PageMethod : std::uint32_t {
 const char* to_string(PageMethod method);
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

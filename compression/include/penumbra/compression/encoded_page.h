@@ -8,6 +8,10 @@
 #include "penumbra/compression/value_map.h"
 #include "penumbra/core/aligned_allocator.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 /// Small bit-packed blocks of per-vertex integers, one block per vertex-window, so that any
@@ -148,3 +152,5 @@ void for_each_array(F&& f, Pages&... p) {
 }
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

@@ -12,6 +12,10 @@
 #include "penumbra/compression/encoded_page.h"
 #include "penumbra/compression/value_map.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 /// What a compressed field file says about its field (the file header).
@@ -147,3 +151,5 @@ private:
 };
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

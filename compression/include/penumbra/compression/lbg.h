@@ -5,6 +5,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 /// A codebook laid out for nearest-entry search: entries transposed (dim x k) so that the
@@ -43,3 +47,5 @@ std::vector<float> train_lbg(const float* vectors, std::size_t count, std::uint3
                              const std::vector<float>* init = nullptr, double* mse = nullptr);
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

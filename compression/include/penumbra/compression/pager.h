@@ -12,6 +12,10 @@
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/window_codec.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 struct PagerOptions {
@@ -100,3 +104,5 @@ private:
 };
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

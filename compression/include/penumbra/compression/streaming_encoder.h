@@ -15,6 +15,10 @@
 #include "penumbra/compression/value_map.h"
 #include "penumbra/compression/window_codec.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 struct StreamingOptions {
@@ -112,3 +116,5 @@ private:
 };
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

@@ -4,6 +4,10 @@
 #include <cmath>
 #include <cstdint>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 /// How a page's float32 values stand for the field's values: value = offset + scale x stored,
@@ -44,3 +48,5 @@ void apply_map(const ValueMap& map, const float* stored, std::uint64_t count, do
 void narrow_through_map(const ValueMap& map, float* values, std::uint64_t count);
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

@@ -2,6 +2,10 @@
 // compression/include/penumbra/compression/version.h
 #pragma once
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 /// Version of the compressed field-history container format this build writes. Readers take
 /// every version up to this one:
@@ -22,3 +26,5 @@ namespace penumbra::compression {
 ///      versions read with the identity map
 constexpr int kContainerFormatVersion = 7;
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

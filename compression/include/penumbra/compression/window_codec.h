@@ -8,6 +8,10 @@
 #include "penumbra/compression/codec_params.h"
 #include "penumbra/compression/encoded_page.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::compression {
 
 namespace detail {
@@ -99,3 +103,5 @@ void decode_window(const EncodedPage& page, float* out);
 void decode_vertex(const EncodedPage& page, std::uint64_t vertex, float* out);
 
 }  // namespace penumbra::compression
+
+PNB_PUBLIC_END

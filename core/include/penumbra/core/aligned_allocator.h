@@ -4,6 +4,10 @@
 #include <cstddef>
 #include <new>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// An allocator whose blocks start on an `Align`-byte boundary, for arrays that vector code
@@ -36,3 +40,5 @@ struct AlignedAllocator {
 };
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -3,6 +3,10 @@
 #pragma once
 #include <chrono>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Milliseconds on the steady clock since t0: what frame budgets, reports and benchmarks time.
@@ -11,3 +15,5 @@ inline double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

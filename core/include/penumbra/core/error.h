@@ -4,6 +4,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Error categories; numerically equal to the C API's pnb_status values.
@@ -34,6 +38,8 @@ inline void require(bool condition, const std::string& message) {
 }
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END
 
 /// Internal invariant check; compiled out of release builds.
 #ifdef NDEBUG

@@ -6,6 +6,10 @@
 
 #include "penumbra/core/mesh_view.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Where a field's values live.
@@ -51,3 +55,5 @@ double normalize_value(double v, double lo, double hi);
 std::vector<float> normalize_values(const std::vector<double>& values, double lo, double hi);
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

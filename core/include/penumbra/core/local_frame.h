@@ -5,6 +5,10 @@
 
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// A mesh's local frame: world point p is (p - center) / scale there. Float32 copies of a mesh
@@ -43,3 +47,5 @@ struct LocalFrame {
 };
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -3,6 +3,10 @@
 #pragma once
 #include "penumbra/core/mesh_view.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// The extents (bounding-box diagonals) a mesh may have, in world units. Within them every
@@ -24,3 +28,5 @@ inline constexpr double kMaxMeshOffset = 1e9;
 void validate_mesh(const MeshView& mesh, const char* call);
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -6,6 +6,10 @@
 
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Element type of caller arrays.
@@ -79,3 +83,5 @@ struct MeshView {
 };
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -3,6 +3,10 @@
 #pragma once
 #include <cstdint>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// The low 21 bits of x spread to every third bit: interleaving three of these (shifted by 0, 1
@@ -18,3 +22,5 @@ inline std::uint64_t spread_bits_3d(std::uint64_t x) {
 }
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -4,6 +4,10 @@
 #include <cstddef>
 #include <functional>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Number of worker threads Penumbra uses: PNB_NUM_THREADS if set, else hardware concurrency.
@@ -28,3 +32,5 @@ public:
 };
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

@@ -3,6 +3,10 @@
 #pragma once
 #include <cmath>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra {
 
 /// Small fixed-size 3-vector used for geometry in double and float precision.
@@ -52,3 +56,5 @@ struct Bounds {
 };
 
 }  // namespace penumbra
+
+PNB_PUBLIC_END

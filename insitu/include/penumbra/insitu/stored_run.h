@@ -9,6 +9,10 @@
 
 #include "penumbra/core/mesh_view.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::insitu {
 
 /// One segment of a store directory: the mesh the solver published (one topology) and one
@@ -51,3 +55,5 @@ private:
 };
 
 }  // namespace penumbra::insitu
+
+PNB_PUBLIC_END

@@ -9,6 +9,10 @@
 
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// The boundary of a prepared tet mesh as a triangle surface, held in an OpenMesh TriMesh
@@ -43,3 +47,5 @@ private:
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

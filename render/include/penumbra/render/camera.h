@@ -3,6 +3,10 @@
 #pragma once
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// A ray origin + t * direction (direction need not be unit length unless stated).
@@ -39,3 +43,5 @@ struct Camera {
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

@@ -11,6 +11,10 @@
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// Per-ray result, for tests and diagnostics.
@@ -57,3 +61,5 @@ RayTrace trace_reference(const TetMesh& mesh, const std::vector<float>& scalars,
                          const Ray& ray);
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

@@ -5,6 +5,10 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// One EGL device as EGL_EXT_device_enumeration lists it.
@@ -59,3 +63,5 @@ bool hardware_gpu_present(const GpuOptions& options = {}) noexcept;
 bool gpu_backend_compiled() noexcept;
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

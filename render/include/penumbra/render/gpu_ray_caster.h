@@ -14,6 +14,10 @@
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// What the opened device is.
@@ -101,3 +105,5 @@ private:
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

@@ -4,6 +4,10 @@
 #include <string>
 #include <vector>
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// Row-major RGBA image, top row first, premultiplied alpha, linear float in [0,1].
@@ -31,3 +35,5 @@ void write_png(const std::string& path, const std::vector<unsigned char>& rgb, i
 std::vector<unsigned char> read_png_rgb(const std::string& path, int& width, int& height);
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

@@ -23,6 +23,10 @@
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 class GpuDevice;  // penumbra/render/gpu_ray_caster.h
@@ -195,3 +199,5 @@ private:
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

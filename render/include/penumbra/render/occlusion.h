@@ -13,6 +13,10 @@
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 class GpuDevice;
@@ -74,3 +78,5 @@ private:
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

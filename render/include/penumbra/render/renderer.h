@@ -10,6 +10,10 @@
 #include "penumbra/render/tet_mesh.h"
 #include "penumbra/render/transfer_function.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// Options shared by the renderers.
@@ -61,3 +65,5 @@ public:
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

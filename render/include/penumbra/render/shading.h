@@ -7,6 +7,10 @@
 
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 enum class LightingModel {
@@ -42,3 +46,5 @@ struct Shading {
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

@@ -10,6 +10,10 @@
 #include "penumbra/core/mesh_view.h"
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 class BoundarySurface;
@@ -54,3 +58,5 @@ struct TetMesh {
 TetMesh prepare_tet_mesh(const MeshView& mesh, const char* call = "prepare_tet_mesh");
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

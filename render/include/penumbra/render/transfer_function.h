@@ -5,6 +5,10 @@
 
 #include "penumbra/core/vec3.h"
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::render {
 
 /// A colour control point: data value x and linear RGB in [0,1].
@@ -34,3 +38,5 @@ struct TransferFunction {
 };
 
 }  // namespace penumbra::render
+
+PNB_PUBLIC_END

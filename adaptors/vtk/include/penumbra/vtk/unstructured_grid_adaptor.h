@@ -14,6 +14,10 @@
 
 class vtkUnstructuredGrid;
 
+#include "penumbra/core/export.h"
+
+PNB_PUBLIC_BEGIN
+
 namespace penumbra::vtk {
 
 /// What the adaptor had to copy and what it dropped; everything not listed is a view of the
@@ -95,3 +99,5 @@ private:
 const char* type_name(pnb_type type);
 
 }  // namespace penumbra::vtk
+
+PNB_PUBLIC_END
