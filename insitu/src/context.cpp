@@ -215,6 +215,7 @@ void Context::publish_mesh(const MeshView& mesh) {
                 " is unchanged but the mesh now has " + std::to_string(mesh.point_count()) + " points and " +
                 std::to_string(mesh.cell_count()) + " cells (was " + std::to_string(m_mesh->view.point_count()) +
                 " and " + std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the mesh changes");
+    require_unmoved_points(mesh);
     return;
   }
   auto p = std::make_unique<PreparedMesh>();
@@ -251,6 +252,22 @@ void Context::publish_mesh(const MeshView& mesh) {
   if (m_store) m_store->begin_segment(m_mesh->view);
   // Fields were sized for the old mesh.
   m_fields.clear();
+}
+
+void Context::require_unmoved_points(const MeshView& mesh) const {
+  // One pass over the coordinates, against the prepared mesh's copy: far cheaper than preparing,
+  // and it keeps a moving mesh under a fixed version from rendering its old positions.
+  const std::vector<Vec3d>& held = m_mesh->tets->points;
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
+    const Vec3d p = mesh.point(i);
+    if (p == held[i]) continue;
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "pnb_publish_mesh: point %zu moved from (%.9g, %.9g, %.9g) to (%.9g, %.9g, %.9g) but topology_version %llu "
+                  "is unchanged; bump topology_version when points move",
+                  i, held[i].x, held[i].y, held[i].z, p.x, p.y, p.z, static_cast<unsigned long long>(mesh.topology_version));
+    throw Error(ErrorCode::invalid_argument, text);
+  }
 }
 
 void Context::publish_field(const FieldView& field, bool copy) {

@@ -103,6 +103,9 @@ private:
   using StepValues = std::vector<std::optional<StepField>>;
 
   void require_open(const char* call) const;
+  /// Throws Error(invalid_argument) naming the first point of `mesh` that differs from the
+  /// prepared mesh's (republished under the same topology_version).
+  void require_unmoved_points(const MeshView& mesh) const;
   /// Point values of config field `index` this step; throws Error(invalid_operation) when the
   /// field was not published.
   const StepField& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;

@@ -68,8 +68,8 @@ TEST(Context, UnchangedTopologyVersionSkipsPreparation) {
   for (int i = 0; i < 10; ++i) ctx.publish_mesh(big.view());
   const auto t2 = std::chrono::steady_clock::now();
   EXPECT_EQ(ctx.mesh_preparations(), 1u);
-  // Ten republishes must cost less than one preparation (they are O(1); preparing 13824 hexes
-  // takes milliseconds), a loose bound that timing noise cannot break.
+  // Ten republishes must cost less than one preparation (each is one pass comparing the points;
+  // preparing 13824 hexes takes milliseconds), a loose bound that timing noise cannot break.
   EXPECT_LT((t2 - t1).count(), (t1 - t0).count());
   big.topology_version = 2;
   ctx.publish_mesh(big.view());
@@ -77,6 +77,28 @@ TEST(Context, UnchangedTopologyVersionSkipsPreparation) {
   // Same version with different counts is the solver's bug, reported rather than ignored.
   s.mesh.topology_version = 2;
   EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
+}
+
+// A moving mesh republished under its old topology_version would render its old positions: the
+// republish compares the points and names the first that moved.
+TEST(Context, PointsThatMovedUnderAnUnchangedTopologyVersionAreRefused) {
+  TempDir tmp;
+  Scene s;
+  Context ctx(parse_config(testing::small_config(tmp / "db")));
+  ctx.publish_mesh(s.mesh.view());
+  ctx.publish_mesh(s.mesh.view());  // the same points: accepted
+  s.mesh.xyz[3 * 17 + 1] += 1e-9;
+  try {
+    ctx.publish_mesh(s.mesh.view());
+    ADD_FAILURE() << "expected the moved point to be refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
+    for (const char* part : {"point 17 moved", "topology_version 1 is unchanged", "bump topology_version"})
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+  }
+  s.mesh.topology_version = 2;
+  ctx.publish_mesh(s.mesh.view());
+  EXPECT_EQ(ctx.mesh_preparations(), 2u);
 }
 
 TEST(Context, UnconfiguredFieldsAreNeitherCopiedNorChecked) {
