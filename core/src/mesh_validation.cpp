@@ -59,7 +59,12 @@ void check_extent(const Bounds& b, const std::string& who) {
 void validate_mesh(const MeshView& m, const char* call) {
   const std::string who = std::string(call) + ": ";
   require(m.points.count > 0, who + "mesh has no points");
-  require(m.points.data != nullptr, who + "points pointer is null");
+  if (m.points.data == nullptr) {
+    const bool any = m.axes[0].data || m.axes[1].data || m.axes[2].data;
+    require(any, who + "points pointer is null (give interleaved xyz, or the three coordinate arrays)");
+    for (int a = 0; a < 3; ++a)
+      require(m.axes[a].data != nullptr, who + "coordinate array " + "xyz"[a] + " is null (the three arrays go together)");
+  }
   require(m.point_type == ScalarType::float32 || m.point_type == ScalarType::float64,
           who + "points must be float32 or float64");
   require(m.connectivity.type == ScalarType::int32 || m.connectivity.type == ScalarType::int64,

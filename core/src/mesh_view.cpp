@@ -19,6 +19,14 @@ std::int64_t MeshView::cell_begin(std::size_t c) const {
 }
 
 Vec3d MeshView::point(std::size_t i) const {
+  if (!points.data) {
+    auto coordinate = [&](int a) {
+      const std::byte* p = axes[a].at(i);
+      return point_type == ScalarType::float32 ? double(*reinterpret_cast<const float*>(p))
+                                               : *reinterpret_cast<const double*>(p);
+    };
+    return {coordinate(0), coordinate(1), coordinate(2)};
+  }
   const std::byte* p = points.at(i);
   if (point_type == ScalarType::float32) {
     const float* f = reinterpret_cast<const float*>(p);

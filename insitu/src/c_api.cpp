@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/c_api.cpp -- the C API: argument checks, conversion to views, and the guard that
 // keeps every exception out of the host program
+#include <cstddef>
 #include <cstring>
 #include <new>
 #include <string>
@@ -21,7 +22,7 @@ namespace {
 // The sizes of the first layouts with struct_size (ABI 2), padding included: the smallest struct
 // a caller may pass. A member added later starts at or after these sizes (never in the padding,
 // which an older caller leaves unset); these constants then keep the ABI-2 sizes.
-constexpr std::size_t kFirstMeshDescBytes = sizeof(pnb_mesh_desc);
+constexpr std::size_t kFirstMeshDescBytes = offsetof(pnb_mesh_desc, point_x);  // ABI 3 added the three arrays
 constexpr std::size_t kFirstFieldDescBytes = sizeof(pnb_field_desc);
 constexpr std::size_t kFirstStepStatsBytes = sizeof(pnb_step_stats);
 
@@ -86,18 +87,38 @@ penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
   require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(raw(d.point_type)));
   require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(raw(d.index_type)));
   require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
-  require(d.points != nullptr, who + "points is NULL");
-  const std::int64_t item = 3 * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
-  const std::int64_t stride = d.point_stride_bytes == 0 ? item : d.point_stride_bytes;
-  require(stride >= item, who + "point_stride_bytes " + std::to_string(d.point_stride_bytes) +
-                              " is smaller than one xyz point (" + std::to_string(item) + " bytes)");
+  const bool three_arrays = d.points == nullptr && (d.point_x || d.point_y || d.point_z);
+  require(d.points != nullptr || three_arrays, who + "points is NULL (and no point_x, point_y, point_z either)");
+  require(d.points == nullptr || !(d.point_x || d.point_y || d.point_z),
+          who + "give the points either interleaved (points) or as three arrays (point_x, point_y, point_z), not both");
+  if (three_arrays) {
+    require(d.point_x && d.point_y && d.point_z, who + "point_x, point_y and point_z go together: one of them is NULL");
+    const std::int64_t item = static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
+    const std::int64_t stride = d.point_axis_stride_bytes == 0 ? item : d.point_axis_stride_bytes;
+    require(stride >= item, who + "point_axis_stride_bytes " + std::to_string(d.point_axis_stride_bytes) +
+                                " is smaller than one coordinate (" + std::to_string(item) + " bytes)");
+  } else {
+    const std::int64_t item = 3 * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
+    const std::int64_t stride = d.point_stride_bytes == 0 ? item : d.point_stride_bytes;
+    require(stride >= item, who + "point_stride_bytes " + std::to_string(d.point_stride_bytes) +
+                                " is smaller than one xyz point (" + std::to_string(item) + " bytes)");
+  }
   require(d.connectivity_count > 0, who + "connectivity_count must be > 0, got " + std::to_string(d.connectivity_count));
   require(d.connectivity != nullptr, who + "connectivity is NULL");
   require(d.cell_types != nullptr, who + "cell_types is NULL");
   require(d.cell_types_count >= 1, who + "cell_types_count must be >= 1, got " + std::to_string(d.cell_types_count));
 
   penumbra::MeshView v;
-  v.points = {static_cast<const std::byte*>(d.points), static_cast<std::size_t>(d.point_count), static_cast<std::ptrdiff_t>(stride)};
+  const std::size_t n = static_cast<std::size_t>(d.point_count), size = penumbra::scalar_size(scalar_type(d.point_type));
+  if (three_arrays) {
+    const auto stride = static_cast<std::ptrdiff_t>(d.point_axis_stride_bytes == 0 ? size : d.point_axis_stride_bytes);
+    const void* axes[3] = {d.point_x, d.point_y, d.point_z};
+    for (int a = 0; a < 3; ++a) v.axes[a] = {static_cast<const std::byte*>(axes[a]), n, stride};
+    v.points = {nullptr, n, 0};
+  } else {
+    const auto stride = static_cast<std::ptrdiff_t>(d.point_stride_bytes == 0 ? 3 * size : d.point_stride_bytes);
+    v.points = {static_cast<const std::byte*>(d.points), n, stride};
+  }
   v.point_type = scalar_type(d.point_type);
   v.connectivity = {d.connectivity, static_cast<std::size_t>(d.connectivity_count), scalar_type(d.index_type)};
   v.cell_types = d.cell_types;

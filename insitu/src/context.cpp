@@ -241,6 +241,7 @@ void Context::publish_mesh(const MeshView& mesh) {
   p->cell_types.assign(mesh.cell_types, mesh.cell_types + mesh.cell_type_count);
   p->view = mesh;
   p->view.points = {reinterpret_cast<const std::byte*>(p->tets->points.data()), mesh.points.count, sizeof(Vec3d)};
+  p->view.axes = {};  // the prepared copy is interleaved
   p->view.point_type = ScalarType::float64;
   p->view.connectivity.data = p->connectivity.data();
   p->view.offsets.data = p->offsets.empty() ? nullptr : p->offsets.data();

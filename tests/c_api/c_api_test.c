@@ -4,6 +4,7 @@
 #define _XOPEN_SOURCE 700
 #include <ftw.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -205,6 +206,10 @@ static void test_mesh_errors(pnb_context ctx) {
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "struct_size is 8, not the size of any version of pnb_mesh_desc", "a struct too small");
   m = good_mesh(); m.struct_size = sizeof m + 8;
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "built against a later Penumbra", "a struct from a later version");
+  m = good_mesh(); m.point_x = g_points;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "either interleaved (points) or as three arrays", "points given twice");
+  m = good_mesh(); m.points = NULL; m.point_x = g_points; m.point_y = g_points + 1;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "point_x, point_y and point_z go together", "a missing coordinate array");
 }
 
 static void test_field_errors(pnb_context ctx) {
@@ -290,6 +295,23 @@ int main(void) {
     mesh.topology_version = 6;
     expect(pnb_publish_mesh(ctx, &mesh, PNB_COPY), PNB_INVALID_ARGUMENT, ctx, "cell 2 has offsets [8, 99)",
            "offsets past the connectivity");
+  }
+  {
+    /* The same points as three strided arrays (x, y, z of the interleaved float32 array). */
+    mesh = good_mesh();
+    mesh.points = NULL;
+    mesh.point_x = g_points;
+    mesh.point_y = g_points + 1;
+    mesh.point_z = g_points + 2;
+    mesh.point_axis_stride_bytes = 3 * sizeof(float);
+    mesh.topology_version = 7;
+    expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish three coordinate arrays");
+    /* A caller built against ABI 2 passes the smaller struct: the arrays take their defaults. */
+    mesh = good_mesh();
+    mesh.struct_size = (uint32_t)offsetof(pnb_mesh_desc, point_x);
+    mesh.point_x = g_points; /* beyond the caller's struct: never read */
+    mesh.topology_version = 8;
+    expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish an ABI-2 sized struct");
   }
   mesh = good_mesh();
   expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish valid mesh");

@@ -32,7 +32,7 @@ extern "C" {
 #endif
 
 /* The C ABI's version: bumped when a struct grows or a call is added. */
-#define PNB_ABI_VERSION 2
+#define PNB_ABI_VERSION 3
 
 typedef struct pnb_context_s* pnb_context;
 
@@ -57,7 +57,7 @@ typedef enum { PNB_POINT_FIELD = 0, PNB_CELL_FIELD = 1 } pnb_association;
 
 /* An unstructured mesh as views of the caller's arrays (VTK ordering).
  * points: point_count items of xyz in point_type (PNB_FLOAT32/64), point_stride_bytes apart
- *         (0 means packed). connectivity: connectivity_count ids in index_type (PNB_INT32/64).
+ *         (0 means packed); or NULL with point_x, point_y, point_z (below). connectivity: connectivity_count ids in index_type (PNB_INT32/64).
  * offsets: cell_count + 1 entries in index_type, or NULL when every cell has the same type.
  * cell_types: one uint8 VTK id per cell, or a single entry when cell_types_count == 1.
  * topology_version: bump when points or connectivity change; an unchanged version makes
@@ -75,10 +75,16 @@ typedef struct {
   const uint8_t* cell_types;
   int64_t cell_types_count;
   uint64_t topology_version;
+  /* ABI 3: the coordinates as three arrays instead (points NULL), each in point_type, items
+   * point_axis_stride_bytes apart (0 means packed): a solver's x[], y[], z[] without a copy. */
+  const void* point_x;
+  const void* point_y;
+  const void* point_z;
+  int64_t point_axis_stride_bytes;
 } pnb_mesh_desc;
 
 /* Every member at its default: no arrays, float64 points, int64 indices. */
-#define PNB_MESH_DESC_INIT {sizeof(pnb_mesh_desc), 0, 0, 0, PNB_FLOAT64, 0, 0, 0, PNB_INT64, 0, 0, 0}
+#define PNB_MESH_DESC_INIT {sizeof(pnb_mesh_desc), 0, 0, 0, PNB_FLOAT64, 0, 0, 0, PNB_INT64, 0, 0, 0, 0, 0, 0, 0}
 
 /* One field: count items of `components` values each, in type (PNB_FLOAT32/64), stride_bytes
  * apart (0 means packed). */

@@ -123,3 +123,36 @@ TEST(MeshValidation, UniformCellTypeWithoutOffsets) {
   v.connectivity.count = 11;  // not a multiple of 8
   EXPECT_NE(validation_error(v).find("multiple of 8"), std::string::npos);
 }
+
+// Coordinates as three arrays (x[], y[], z[], float or double, packed or strided) read as the
+// interleaved ones; one array missing is named.
+TEST(MeshView, ThreeCoordinateArraysReadAsInterleavedPoints) {
+  const auto m = fixtures::block(BlockCells::tets, 2, 2, 2, {0, 0, 0}, {1, 2, 3});
+  const MeshView interleaved = m.view();
+  const std::size_t n = m.point_count();
+  std::vector<double> x(n), y(n), z(n);
+  std::vector<float> soa(4 * n);  // x, y, z and a spare float per point: a stride of 16 bytes
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = m.xyz[3 * i], y[i] = m.xyz[3 * i + 1], z[i] = m.xyz[3 * i + 2];
+    for (int a = 0; a < 3; ++a) soa[4 * i + a] = static_cast<float>(m.xyz[3 * i + a]);
+  }
+  MeshView packed = interleaved;
+  packed.points = {nullptr, n, 0};
+  const double* axes[3] = {x.data(), y.data(), z.data()};
+  for (int a = 0; a < 3; ++a) packed.axes[a] = {reinterpret_cast<const std::byte*>(axes[a]), n, sizeof(double)};
+  MeshView strided = packed;
+  strided.point_type = ScalarType::float32;
+  for (int a = 0; a < 3; ++a) strided.axes[a] = {reinterpret_cast<const std::byte*>(soa.data() + a), n, 4 * sizeof(float)};
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(packed.point(i), interleaved.point(i)) << i;
+    EXPECT_EQ(strided.point(i), interleaved.point(i)) << i;  // the block's coordinates are exact in float
+  }
+  EXPECT_NO_THROW(validate_mesh(packed, "test"));
+  packed.axes[1].data = nullptr;
+  try {
+    validate_mesh(packed, "test");
+    ADD_FAILURE() << "expected the missing array to be named";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("coordinate array y is null"), std::string::npos) << e.what();
+  }
+}

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // core/include/penumbra/core/mesh_view.h
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
@@ -59,6 +60,9 @@ struct IndexArray {
 ///
 /// - `points`: one item per point; each item holds x, y, z contiguous in `point_type`
 ///   (float32 or float64); `stride_bytes` is the distance between points (12/24 when packed).
+///   `points.count` is the number of points in either layout.
+/// - `axes`: the coordinates as three arrays instead (x, y, z, each `stride_bytes` apart), used
+///   when `points.data` is null.
 /// - `connectivity`: point ids of all cells, cell after cell.
 /// - `offsets`: cell c uses connectivity[offsets[c] .. offsets[c+1]); count = cells + 1.
 ///   May be empty when `cell_types` has a single entry (all cells of one type).
@@ -67,6 +71,7 @@ struct IndexArray {
 ///   version lets Penumbra skip all mesh preparation.
 struct MeshView {
   StridedSpan points;
+  std::array<StridedSpan, 3> axes;
   ScalarType point_type = ScalarType::float64;
   IndexArray connectivity;
   IndexArray offsets;
