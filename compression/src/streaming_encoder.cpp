@@ -153,9 +153,8 @@ void StreamingEncoder::commit_step(double time, double lo, double hi) {
   if (m_filled == m_options.codec.window) submit(m_filled);
 }
 
-double StreamingEncoder::bound_with(double lo, double hi) const {
-  return m_step == 0 ? resolve_bound(m_options.codec.bound, lo, hi)
-                     : resolve_bound(m_options.codec.bound, std::min(m_min, lo), std::max(m_max, hi));
+std::pair<double, double> StreamingEncoder::range_with(double lo, double hi) const {
+  return m_step == 0 ? std::pair{lo, hi} : std::pair{std::min(m_min, lo), std::max(m_max, hi)};
 }
 
 void StreamingEncoder::push(double time, const float* values) {
@@ -164,7 +163,6 @@ void StreamingEncoder::push(double time, const float* values) {
   const std::uint64_t N = m_options.vertex_count;
   // Reject bad values here, on the solver's thread, before anything is recorded.
   const auto [lo, hi] = step_range(values, N, m_step, time);
-  if (m_filled == 0) m_map = ValueMap{}, m_narrowing = 0, m_reach = 0;
   if (!m_map.identity()) {  // a window begun in double goes on in its map
     const std::vector<double> wide(values, values + N);
     push(time, wide.data());
@@ -183,8 +181,9 @@ void StreamingEncoder::push(double time, const double* values) {
   const ValueMap map = m_filled == 0 ? ValueMap::fit(values, N) : m_map;
   // What float32 may cost before the codec: half the bound, leaving it the other half; without a
   // bound, a tenth of what the VQ codec itself costs on smooth fields.
-  const double bound = bound_with(lo, hi);
-  const double range = 2 * (std::max(m_step ? m_max : hi, hi) / 2 - std::min(m_step ? m_min : lo, lo) / 2);
+  const auto [seen_lo, seen_hi] = range_with(lo, hi);
+  const double bound = resolve_bound(m_options.codec.bound, seen_lo, seen_hi);
+  const double range = 2 * (seen_hi / 2 - seen_lo / 2);
   const double allowed = bound > 0 ? bound / 2 : 1e-4 * range;
   float* slot = next_step_slot();
   double worst = 0, reach = 0;
@@ -208,7 +207,6 @@ void StreamingEncoder::push(double time, const double* values) {
     reach = std::max(reach, double(std::fabs(x)));
   }
   m_map = map;
-  if (m_filled == 0) m_narrowing = 0, m_reach = 0;
   m_narrowing = std::max(m_narrowing, worst);
   m_reach = std::max(m_reach, reach);
   commit_step(time, lo, hi);
@@ -231,6 +229,7 @@ void StreamingEncoder::submit(std::uint32_t steps) {
   m_wake.notify_all();
   m_times.clear();
   m_filled = 0;
+  m_map = ValueMap{}, m_narrowing = 0, m_reach = 0;  // the next window starts afresh
   m_filling = (m_filling + 1) % m_buffers.size();
 }
 

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "penumbra/compression/codec_params.h"
@@ -86,8 +87,8 @@ private:
   float* next_step_slot();
   /// Counts a step whose values are in the buffer, with their range; submits a full window.
   void commit_step(double time, double lo, double hi);
-  /// The error bound in the field's units over the range seen so far with [lo, hi] (0: none).
-  double bound_with(double lo, double hi) const;
+  /// The range of the values seen so far together with a step's [lo, hi].
+  std::pair<double, double> range_with(double lo, double hi) const;
   void wait_buffer_free(std::size_t buffer, bool count_as_solver_wait);
   void rethrow_locked();
 
