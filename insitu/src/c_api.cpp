@@ -79,6 +79,36 @@ bool is_float(const pnb_type& t) { return raw(t) == PNB_FLOAT32 || raw(t) == PNB
 bool is_index(const pnb_type& t) { return raw(t) == PNB_INT32 || raw(t) == PNB_INT64; }
 bool valid_ownership(const pnb_ownership& o) { return raw(o) == PNB_BORROW || raw(o) == PNB_COPY; }
 
+/// The stride of items of `item` bytes given as `given` (0: packed); throws naming `name` when
+/// it is shorter than an item.
+std::ptrdiff_t item_stride(std::int64_t given, std::int64_t item, const std::string& name, const std::string& what) {
+  const std::int64_t stride = given == 0 ? item : given;
+  penumbra::require(stride >= item, name + " " + std::to_string(given) + " is smaller than " + what + " (" +
+                                        std::to_string(item) + " bytes)");
+  return static_cast<std::ptrdiff_t>(stride);
+}
+
+/// The mesh's points into `v`: interleaved xyz, or three coordinate arrays (points NULL).
+void set_points(const pnb_mesh_desc& d, const std::string& who, penumbra::MeshView& v) {
+  using penumbra::require;
+  const bool any_array = d.point_x || d.point_y || d.point_z;
+  require(d.points != nullptr || any_array, who + "points is NULL (and no point_x, point_y, point_z either)");
+  require(d.points == nullptr || !any_array,
+          who + "give the points either interleaved (points) or as three arrays (point_x, point_y, point_z), not both");
+  const std::size_t n = static_cast<std::size_t>(d.point_count);
+  const auto size = static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
+  if (d.points) {
+    v.points = {static_cast<const std::byte*>(d.points), n,
+                item_stride(d.point_stride_bytes, 3 * size, who + "point_stride_bytes", "one xyz point")};
+    return;
+  }
+  require(d.point_x && d.point_y && d.point_z, who + "point_x, point_y and point_z go together: one of them is NULL");
+  const std::ptrdiff_t stride = item_stride(d.point_axis_stride_bytes, size, who + "point_axis_stride_bytes", "one coordinate");
+  const void* axes[3] = {d.point_x, d.point_y, d.point_z};
+  for (int a = 0; a < 3; ++a) v.axes[a] = {static_cast<const std::byte*>(axes[a]), n, stride};
+  v.points = {nullptr, n, 0};
+}
+
 /// Checks what can be checked without reading the arrays, then wraps them in a MeshView.
 /// validate_mesh (inside preparation) checks their contents.
 penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
@@ -87,38 +117,13 @@ penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
   require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(raw(d.point_type)));
   require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(raw(d.index_type)));
   require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
-  const bool three_arrays = d.points == nullptr && (d.point_x || d.point_y || d.point_z);
-  require(d.points != nullptr || three_arrays, who + "points is NULL (and no point_x, point_y, point_z either)");
-  require(d.points == nullptr || !(d.point_x || d.point_y || d.point_z),
-          who + "give the points either interleaved (points) or as three arrays (point_x, point_y, point_z), not both");
-  if (three_arrays) {
-    require(d.point_x && d.point_y && d.point_z, who + "point_x, point_y and point_z go together: one of them is NULL");
-    const std::int64_t item = static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
-    const std::int64_t stride = d.point_axis_stride_bytes == 0 ? item : d.point_axis_stride_bytes;
-    require(stride >= item, who + "point_axis_stride_bytes " + std::to_string(d.point_axis_stride_bytes) +
-                                " is smaller than one coordinate (" + std::to_string(item) + " bytes)");
-  } else {
-    const std::int64_t item = 3 * static_cast<std::int64_t>(penumbra::scalar_size(scalar_type(d.point_type)));
-    const std::int64_t stride = d.point_stride_bytes == 0 ? item : d.point_stride_bytes;
-    require(stride >= item, who + "point_stride_bytes " + std::to_string(d.point_stride_bytes) +
-                                " is smaller than one xyz point (" + std::to_string(item) + " bytes)");
-  }
+  penumbra::MeshView v;
+  set_points(d, who, v);
   require(d.connectivity_count > 0, who + "connectivity_count must be > 0, got " + std::to_string(d.connectivity_count));
   require(d.connectivity != nullptr, who + "connectivity is NULL");
   require(d.cell_types != nullptr, who + "cell_types is NULL");
   require(d.cell_types_count >= 1, who + "cell_types_count must be >= 1, got " + std::to_string(d.cell_types_count));
 
-  penumbra::MeshView v;
-  const std::size_t n = static_cast<std::size_t>(d.point_count), size = penumbra::scalar_size(scalar_type(d.point_type));
-  if (three_arrays) {
-    const auto stride = static_cast<std::ptrdiff_t>(d.point_axis_stride_bytes == 0 ? size : d.point_axis_stride_bytes);
-    const void* axes[3] = {d.point_x, d.point_y, d.point_z};
-    for (int a = 0; a < 3; ++a) v.axes[a] = {static_cast<const std::byte*>(axes[a]), n, stride};
-    v.points = {nullptr, n, 0};
-  } else {
-    const auto stride = static_cast<std::ptrdiff_t>(d.point_stride_bytes == 0 ? 3 * size : d.point_stride_bytes);
-    v.points = {static_cast<const std::byte*>(d.points), n, stride};
-  }
   v.point_type = scalar_type(d.point_type);
   v.connectivity = {d.connectivity, static_cast<std::size_t>(d.connectivity_count), scalar_type(d.index_type)};
   v.cell_types = d.cell_types;
