@@ -56,6 +56,19 @@ void check_extent(const Bounds& b, const std::string& who) {
 
 }  // namespace
 
+Bounds validate_points(const MeshView& m, const char* call) {
+  const std::string who = std::string(call) + ": ";
+  Bounds bounds;
+  for (std::size_t i = 0; i < m.point_count(); ++i) {
+    const Vec3d p = m.point(i);
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
+      fail(who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
+    bounds.extend(p);
+  }
+  check_extent(bounds, who);
+  return bounds;
+}
+
 void validate_mesh(const MeshView& m, const char* call) {
   const std::string who = std::string(call) + ": ";
   require(m.points.count > 0, who + "mesh has no points");
@@ -88,14 +101,7 @@ void validate_mesh(const MeshView& m, const char* call) {
                 std::to_string(m.offsets.count - 1) + " cells");
   }
   const std::size_t np = m.point_count();
-  Bounds bounds;
-  for (std::size_t i = 0; i < np; ++i) {
-    const Vec3d p = m.point(i);
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)))
-      fail(who + "point " + std::to_string(i) + " has a NaN or infinite coordinate");
-    bounds.extend(p);
-  }
-  check_extent(bounds, who);
+  validate_points(m, call);
   const std::size_t nc = m.cell_count();
   require(nc > 0, who + "mesh has no cells");
   for (std::size_t c = 0; c < nc; ++c) {

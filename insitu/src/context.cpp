@@ -208,26 +208,23 @@ std::size_t Context::held_field_bytes() const {
 void Context::publish_mesh(const MeshView& mesh) {
   require_open("pnb_publish_mesh");
   if (m_mesh && m_mesh->view.topology_version == mesh.topology_version) {
-    // Same topology: nothing to redo. Counts are compared because they cost nothing and catch
-    // a solver that changed its mesh but forgot to bump the version.
+    // Same topology. Counts are compared because they cost nothing and catch a solver that
+    // changed its mesh but forgot to bump the version.
     require(mesh.point_count() == m_mesh->view.point_count() && mesh.cell_count() == m_mesh->view.cell_count(),
             "pnb_publish_mesh: topology_version " + std::to_string(mesh.topology_version) +
                 " is unchanged but the mesh now has " + std::to_string(mesh.point_count()) + " points and " +
                 std::to_string(mesh.cell_count()) + " cells (was " + std::to_string(m_mesh->view.point_count()) +
-                " and " + std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the mesh changes");
-    require_unmoved_points(mesh);
+                " and " + std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the connectivity changes");
+    if (points_moved(mesh)) move_points(mesh);
     return;
   }
+  prepare_mesh(mesh);
+}
+
+void Context::prepare_mesh(const MeshView& mesh) {
   auto p = std::make_unique<PreparedMesh>();
   p->tets = std::make_shared<const render::TetMesh>(render::prepare_tet_mesh(mesh, "pnb_publish_mesh"));
-  if (p->tets->tangled()) {
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "pnb_publish_mesh: the mesh is tangled: its cells' volume (%.6g) differs from the volume its boundary "
-                  "encloses (%.6g), so cells overlap and pictures through the overlaps are undefined",
-                  p->tets->tet_volume, p->tets->enclosed_volume);
-    log_line(text);
-  }
+  log_if_tangled(*p->tets);
   p->renderer = make_renderer(p->tets);
   p->on_gpu = std::string(p->renderer->backend()) == "gpu";
 
@@ -240,35 +237,61 @@ void Context::publish_mesh(const MeshView& mesh) {
   }
   p->cell_types.assign(mesh.cell_types, mesh.cell_types + mesh.cell_type_count);
   p->view = mesh;
-  p->view.points = {reinterpret_cast<const std::byte*>(p->tets->points.data()), mesh.points.count, sizeof(Vec3d)};
   p->view.axes = {};  // the prepared copy is interleaved
   p->view.point_type = ScalarType::float64;
   p->view.connectivity.data = p->connectivity.data();
   p->view.offsets.data = p->offsets.empty() ? nullptr : p->offsets.data();
   p->view.cell_types = p->cell_types.data();
-
-  p->cameras = view_cameras(m_config, p->tets->bounds);
   m_mesh = std::move(p);
+  place_views();
   ++m_preparations;
   if (m_store) m_store->begin_segment(m_mesh->view);
   // Fields were sized for the old mesh.
   m_fields.clear();
 }
 
-void Context::require_unmoved_points(const MeshView& mesh) const {
-  // One pass over the coordinates, against the prepared mesh's copy: far cheaper than preparing,
-  // and it keeps a moving mesh under a fixed version from rendering its old positions.
+void Context::log_if_tangled(const render::TetMesh& tets) const {
+  if (!tets.tangled()) return;
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "pnb_publish_mesh: the mesh is tangled: its cells' volume (%.6g) differs from the volume its boundary "
+                "encloses (%.6g), so cells overlap and pictures through the overlaps are undefined",
+                tets.tet_volume, tets.enclosed_volume);
+  log_line(text);
+}
+
+void Context::place_views() {
+  PreparedMesh& p = *m_mesh;
+  p.view.points = {reinterpret_cast<const std::byte*>(p.tets->points.data()), p.tets->points.size(), sizeof(Vec3d)};
+  p.cameras = view_cameras(m_config, p.tets->bounds);
+}
+
+bool Context::points_moved(const MeshView& mesh) const {
+  // One pass over the coordinates against the prepared copy: far cheaper than any update, so
+  // that a solver may republish an unchanged mesh every step.
   const std::vector<Vec3d>& held = m_mesh->tets->points;
-  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
-    const Vec3d p = mesh.point(i);
-    if (p == held[i]) continue;
-    char text[320];
-    std::snprintf(text, sizeof text,
-                  "pnb_publish_mesh: point %zu moved from (%.9g, %.9g, %.9g) to (%.9g, %.9g, %.9g) but topology_version %llu "
-                  "is unchanged; bump topology_version when points move",
-                  i, held[i].x, held[i].y, held[i].z, p.x, p.y, p.z, static_cast<unsigned long long>(mesh.topology_version));
-    throw Error(ErrorCode::invalid_argument, text);
+  for (std::size_t i = 0; i < mesh.point_count(); ++i)
+    if (!(mesh.point(i) == held[i])) return true;
+  return false;
+}
+
+void Context::move_points(const MeshView& mesh) {
+  PreparedMesh& p = *m_mesh;
+  if (!render::keeps_welds(*p.tets, mesh)) {
+    log_line("pnb_publish_mesh: points that coincided when the mesh was prepared moved apart, which changes its "
+             "adjacency: the mesh is prepared anew");
+    return prepare_mesh(mesh);
   }
+  auto moved = std::make_shared<const render::TetMesh>(render::move_tet_mesh(*p.tets, mesh, "pnb_publish_mesh"));
+  log_if_tangled(*moved);
+  p.renderer->move_points(moved);
+  for (auto& lv : p.light_volumes)
+    if (lv) lv->move_points(moved);
+  p.occlusions.clear();  // made again for the moved mesh at the next step
+  p.tets = std::move(moved);
+  place_views();
+  ++m_geometry_updates;
+  if (m_store) m_store->begin_segment(p.view);  // the moved coordinates: a segment of their own
 }
 
 void Context::publish_field(const FieldView& field, bool copy) {

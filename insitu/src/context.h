@@ -49,8 +49,9 @@ public:
 
   /// Prepares `mesh` for rendering (validated, split into tets, adjacency, ray caster) and keeps
   /// an owned copy of its topology for cell-to-point averaging; `mesh` may be freed afterwards.
-  /// When a mesh with the same topology_version is already prepared this returns at once (only
-  /// its point and cell counts are compared).
+  /// Under the topology_version already prepared, the point and cell counts must be the same and
+  /// the points are compared with the prepared ones (one pass): unchanged, nothing is redone;
+  /// moved, only what depends on the positions is (move_points).
   void publish_mesh(const MeshView& mesh);
 
   /// Hands in a field for the next execute(). Fields the config does not render are ignored:
@@ -73,6 +74,8 @@ public:
   const StepStats& last_step() const { return m_last_step; }
   /// Number of times a mesh was actually prepared (republishing an unchanged topology does not count).
   std::size_t mesh_preparations() const { return m_preparations; }
+  /// Number of times moved points were taken under an unchanged topology (move_points).
+  std::size_t geometry_updates() const { return m_geometry_updates; }
   /// Fields currently held, and the bytes of field values copied into the context.
   std::size_t held_field_count() const { return m_fields.size(); }
   std::size_t held_field_bytes() const;
@@ -103,9 +106,18 @@ private:
   using StepValues = std::vector<std::optional<StepField>>;
 
   void require_open(const char* call) const;
-  /// Throws Error(invalid_argument) naming the first point of `mesh` that differs from the
-  /// prepared mesh's (republished under the same topology_version).
-  void require_unmoved_points(const MeshView& mesh) const;
+  /// A new topology: the mesh split, its adjacency, the renderer, cameras; a new store segment.
+  void prepare_mesh(const MeshView& mesh);
+  /// The same topology with its points moved: the connectivity's work is kept (move_tet_mesh),
+  /// the renderer and light volumes move their geometry, occlusion is made again, the cameras
+  /// follow the bounds and the store records the coordinates. A mesh whose welded points moved
+  /// apart is prepared anew.
+  void move_points(const MeshView& mesh);
+  /// Whether any point of `mesh` differs from the prepared mesh's.
+  bool points_moved(const MeshView& mesh) const;
+  /// The prepared view's points and the cameras, from the prepared mesh.
+  void place_views();
+  void log_if_tangled(const render::TetMesh& tets) const;
   /// Point values of config field `index` this step; throws Error(invalid_operation) when the
   /// field was not published.
   const StepField& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
@@ -139,6 +151,7 @@ private:
   std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry
   StepStats m_last_step;
   std::size_t m_preparations = 0;
+  std::size_t m_geometry_updates = 0;
   bool m_finalized = false;
 };
 

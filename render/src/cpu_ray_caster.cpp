@@ -199,6 +199,9 @@ struct CpuRayCaster::Impl {
   double reentry_slack = 0;  // depth tolerance for re-entering at an exit (see trace_ray)
 
   explicit Impl(std::shared_ptr<const TetMesh> m);
+  // The points in the walk's order, the boundary faces' BVH and the re-entry slack, from mesh's
+  // positions (at construction, and after move_points).
+  void place_points();
   // Geometry: RayGeometry or ScreenGeometry (walk_geometry.h). `f` is the ray itself, for the
   // BVH and the shading.
   template <class Geometry>
@@ -247,31 +250,31 @@ CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) 
   for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
   point_ids = detail::morton_point_order(tm);
   std::vector<std::int32_t> point_rank(point_ids.size());
-  points.resize(point_ids.size());
-  for (std::size_t i = 0; i < point_ids.size(); ++i) {
-    point_rank[static_cast<std::size_t>(point_ids[i])] = static_cast<std::int32_t>(i);
-    points[i] = tm.points[static_cast<std::size_t>(point_ids[i])];
-  }
+  for (std::size_t i = 0; i < point_ids.size(); ++i) point_rank[static_cast<std::size_t>(point_ids[i])] = static_cast<std::int32_t>(i);
   tets = detail::walk_tets(tm, order);
   for (WalkTet& w : tets)
     for (std::int32_t& v : w.v) v = point_rank[static_cast<std::size_t>(v)];
   triangles.reserve(tm.boundary.size());
-  std::vector<Bounds> boxes;
-  boxes.reserve(tm.boundary.size());
   for (const auto& bf : tm.boundary) {
     const auto& tv = tm.tets[static_cast<std::size_t>(bf.tet)];
     BoundaryTriangle tri{};
-    Bounds box;
-    for (int j = 0; j < 3; ++j) {
-      const std::int32_t v = tv[kFaceVertices[bf.face][j]];
-      tri.v[j] = point_rank[static_cast<std::size_t>(v)];
-      box.extend(tm.points[static_cast<std::size_t>(v)]);
-    }
+    for (int j = 0; j < 3; ++j) tri.v[j] = point_rank[static_cast<std::size_t>(tv[kFaceVertices[bf.face][j]])];
     tri.tet = rank[static_cast<std::size_t>(bf.tet)];
     tri.face = bf.face;
     triangles.push_back(tri);
-    boxes.push_back(box);
   }
+  place_points();
+}
+
+void CpuRayCaster::Impl::place_points() {
+  const TetMesh& tm = *mesh;
+  points.resize(point_ids.size());
+  parallel_for(points.size(), 1 << 15, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) points[i] = tm.points[static_cast<std::size_t>(point_ids[i])];
+  });
+  std::vector<Bounds> boxes(triangles.size());
+  for (std::size_t i = 0; i < triangles.size(); ++i)
+    for (const std::int32_t v : triangles[i].v) boxes[i].extend(points[static_cast<std::size_t>(v)]);
   bvh = detail::Bvh(boxes, 1e-9 * std::max(tm.bounds.diagonal(), 1e-300), 4);
   reentry_slack = 1e-9 * tm.bounds.diagonal();
 }
@@ -575,6 +578,12 @@ CpuRayCaster::CpuRayCaster(std::shared_ptr<const TetMesh> mesh) : m_impl(std::ma
 CpuRayCaster::~CpuRayCaster() = default;
 
 const TetMesh& CpuRayCaster::mesh() const { return *m_impl->mesh; }
+
+void CpuRayCaster::move_points(std::shared_ptr<const TetMesh> moved) {
+  detail::require_same_connectivity("CpuRayCaster::move_points", *m_impl->mesh, moved.get());
+  m_impl->mesh = std::move(moved);
+  m_impl->place_points();
+}
 
 Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                            const RenderOptions& options) const {

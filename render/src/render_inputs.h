@@ -37,4 +37,16 @@ inline void check_frame_inputs(const char* call, const TetMesh& mesh, const std:
   options.shading.validate(call, mesh.points.size());
 }
 
+/// Throws Error(invalid_argument) naming `call` unless `moved` is `held` with its points moved:
+/// the same points, tets and boundary (move_tet_mesh keeps them).
+inline void require_same_connectivity(const char* call, const TetMesh& held, const TetMesh* moved) {
+  require(moved != nullptr, std::string(call) + ": mesh is null; expected the moved mesh (move_tet_mesh)");
+  require(moved->points.size() == held.points.size() && moved->tets == held.tets &&
+              moved->boundary.size() == held.boundary.size(),
+          std::string(call) + ": the moved mesh has " + std::to_string(moved->points.size()) + " points and " +
+              std::to_string(moved->tet_count()) + " tets, not the held mesh's connectivity (" +
+              std::to_string(held.points.size()) + " points, " + std::to_string(held.tet_count()) +
+              " tets); make a renderer for a new mesh");
+}
+
 }  // namespace penumbra::render::detail

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -41,17 +42,25 @@ std::uint64_t bits(double v) {
 // Maps every point to the smallest id of the points at exactly the same coordinates. Solvers
 // that duplicate points along material or partition interfaces would otherwise get false
 // internal boundaries (and rays would stop there).
-std::vector<std::int32_t> weld_points(const std::vector<Vec3d>& points, std::size_t& welded) {
+std::vector<std::int32_t> weld_points(const std::vector<Vec3d>& points, std::vector<std::array<std::int32_t, 2>>& welds) {
   std::vector<std::int32_t> canon(points.size());
   std::unordered_map<Bits3, std::int32_t, Bits3Hash> first;
   first.reserve(points.size());
-  welded = 0;
+  welds.clear();
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto [it, inserted] =
         first.try_emplace(Bits3{bits(points[i].x), bits(points[i].y), bits(points[i].z)}, static_cast<std::int32_t>(i));
     canon[i] = it->second;
-    welded += inserted ? 0 : 1;
+    if (!inserted) welds.push_back({static_cast<std::int32_t>(i), it->second});
   }
+  return canon;
+}
+
+// The canonical point of every point, from the welds recorded at preparation.
+std::vector<std::int32_t> canonical_points(const TetMesh& m) {
+  std::vector<std::int32_t> canon(m.points.size());
+  for (std::size_t i = 0; i < canon.size(); ++i) canon[i] = static_cast<std::int32_t>(i);
+  for (const auto& [point, first] : m.welds) canon[static_cast<std::size_t>(point)] = first;
   return canon;
 }
 
@@ -169,6 +178,42 @@ void measure_volumes(TetMesh& m) {
   m.enclosed_volume = enclosed / 6;
 }
 
+// Every tet keeps the orientation it was prepared with (positive volume), and every input cell a
+// volume that rays can resolve (validate_mesh's relative test), after its points moved. The tets
+// of a cell are consecutive (split_cells).
+void require_upright_cells(const TetMesh& m, const char* call) {
+  const std::size_t nt = m.tets.size();
+  for (std::size_t begin = 0; begin < nt;) {
+    const std::int64_t cell = m.source_cell[begin];
+    std::size_t end = begin;
+    double v6 = 0, smallest = HUGE_VAL;
+    Bounds box;
+    for (; end < nt && m.source_cell[end] == cell; ++end) {
+      const auto& t = m.tets[end];
+      const Vec3d& a = m.points[static_cast<std::size_t>(t[0])];
+      const Vec3d& b = m.points[static_cast<std::size_t>(t[1])];
+      const Vec3d& c = m.points[static_cast<std::size_t>(t[2])];
+      const Vec3d& d = m.points[static_cast<std::size_t>(t[3])];
+      const double v = signed_volume6(a, b, c, d);
+      smallest = std::min(smallest, v);
+      v6 += v;
+      for (const Vec3d* p : {&a, &b, &c, &d}) box.extend(*p);
+    }
+    const double size = box.diagonal();
+    if (!(smallest > 0) || !(v6 > 6e-12 * size * size * size)) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "%s: cell %lld is %s by the points' motion (volume %.6g, smallest of its %zu tets %.6g, for a size of "
+                    "%.6g): a moving mesh keeps every cell's orientation; publish a new topology_version after "
+                    "remeshing",
+                    call, static_cast<long long>(cell), smallest < 0 ? "inverted" : "flattened", v6 / 6, end - begin,
+                    smallest / 6, size);
+      throw Error(ErrorCode::invalid_argument, text);
+    }
+    begin = end;
+  }
+}
+
 }  // namespace
 
 bool TetMesh::tangled() const {
@@ -188,13 +233,47 @@ TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
     m.bounds.extend(m.points[i]);
   }
   m.frame = LocalFrame::of(m.bounds);
-  const auto canon = weld_points(m.points, m.welded_points);
+  const auto canon = weld_points(m.points, m.welds);
+  m.welded_points = m.welds.size();
   split_cells(view, canon, m);
   require(m.tets.size() < static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4),
           std::string(call) + ": more than 2^29 tets are not supported");
   m.reoriented_tets = orient_tets(m, view);
   build_adjacency(m, canon);
   m.surface = make_surface(m, canon);
+  measure_volumes(m);
+  return m;
+}
+
+bool keeps_welds(const TetMesh& prepared, const MeshView& moved) {
+  for (const auto& [point, first] : prepared.welds) {
+    const Vec3d a = moved.point(static_cast<std::size_t>(point)), b = moved.point(static_cast<std::size_t>(first));
+    if (bits(a.x) != bits(b.x) || bits(a.y) != bits(b.y) || bits(a.z) != bits(b.z)) return false;
+  }
+  return true;
+}
+
+TetMesh move_tet_mesh(const TetMesh& prepared, const MeshView& moved, const char* call) {
+  require(moved.point_count() == prepared.points.size(),
+          std::string(call) + ": the moved mesh has " + std::to_string(moved.point_count()) + " points; the prepared one has " +
+              std::to_string(prepared.points.size()));
+  TetMesh m;
+  m.bounds = validate_points(moved, call);
+  m.frame = LocalFrame::of(m.bounds);
+  m.points.resize(prepared.points.size());
+  parallel_for(m.points.size(), 1 << 15, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) m.points[i] = moved.point(i);
+  });
+  m.tets = prepared.tets;
+  m.source_cell = prepared.source_cell;
+  require_upright_cells(m, call);
+  m.neighbors = prepared.neighbors;
+  m.boundary = prepared.boundary;
+  m.welds = prepared.welds;
+  m.welded_points = prepared.welded_points;
+  m.reoriented_tets = prepared.reoriented_tets;
+  m.topology_version = prepared.topology_version;
+  m.surface = make_surface(m, canonical_points(m));
   measure_volumes(m);
   return m;
 }

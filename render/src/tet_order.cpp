@@ -65,6 +65,8 @@ TetMesh with_points_in_order(const TetMesh& mesh, const std::vector<std::int32_t
     for (std::size_t t = b; t < e; ++t)
       for (auto& v : out.tets[t]) v = rank[static_cast<std::size_t>(v)];
   });
+  for (auto& weld : out.welds)
+    for (auto& v : weld) v = rank[static_cast<std::size_t>(v)];
   return out;
 }
 

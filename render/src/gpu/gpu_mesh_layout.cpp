@@ -102,14 +102,6 @@ GpuMeshLayout build_gpu_mesh_layout(const TetMesh& m) {
   require(m.points.size() < (std::size_t{1} << 31) / 3,
           "GpuRayCaster: mesh has " + std::to_string(m.points.size()) + " points; at most 715827882 fit int32 indexing");
   GpuMeshLayout g;
-  g.frame = m.frame;
-  g.diagonal = g.frame.length(m.bounds.diagonal());
-  g.points.resize(m.points.size() * 3);
-  for (std::size_t i = 0; i < m.points.size(); ++i) {
-    const Vec3d p = g.frame.point(m.points[i]);
-    for (int a = 0; a < 3; ++a) g.points[3 * i + static_cast<std::size_t>(a)] = static_cast<float>(p[a]);
-  }
-
   const std::vector<std::int32_t> order = detail::morton_order(m);
   std::vector<std::int32_t> rank(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) rank[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
@@ -130,36 +122,47 @@ GpuMeshLayout build_gpu_mesh_layout(const TetMesh& m) {
       }
     }
   });
-
-  std::vector<std::array<std::int32_t, 4>> triangles;
-  std::vector<Box> boxes;
-  triangles.reserve(m.boundary.size());
-  boxes.reserve(m.boundary.size());
+  g.boundary.reserve(m.boundary.size());
   for (const auto& bf : m.boundary) {
     const auto& tv = m.tets[static_cast<std::size_t>(bf.tet)];
     std::array<std::int32_t, 4> tri{};
-    Box box{};
+    for (int j = 0; j < 3; ++j) tri[static_cast<std::size_t>(j)] = tv[static_cast<std::size_t>(kFaceVertices[bf.face][j])];
+    tri[3] = (rank[static_cast<std::size_t>(bf.tet)] << 2) | bf.face;
+    g.boundary.push_back(tri);
+  }
+  place_gpu_mesh_points(m, g);
+  return g;
+}
+
+void place_gpu_mesh_points(const TetMesh& m, GpuMeshLayout& g) {
+  g.frame = m.frame;
+  g.diagonal = g.frame.length(m.bounds.diagonal());
+  g.points.resize(m.points.size() * 3);
+  parallel_for(m.points.size(), 1 << 15, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const Vec3d p = g.frame.point(m.points[i]);
+      for (int a = 0; a < 3; ++a) g.points[3 * i + static_cast<std::size_t>(a)] = static_cast<float>(p[a]);
+    }
+  });
+  std::vector<Box> boxes(g.boundary.size());
+  for (std::size_t i = 0; i < g.boundary.size(); ++i) {
+    Box& box = boxes[i];
     for (int a = 0; a < 3; ++a) {
       box.lo[a] = std::numeric_limits<float>::infinity();
       box.hi[a] = -std::numeric_limits<float>::infinity();
     }
     for (int j = 0; j < 3; ++j) {
-      tri[static_cast<std::size_t>(j)] = tv[static_cast<std::size_t>(kFaceVertices[bf.face][j])];
-      const float* p = &g.points[3 * static_cast<std::size_t>(tri[static_cast<std::size_t>(j)])];
+      const float* p = &g.points[3 * static_cast<std::size_t>(g.boundary[i][static_cast<std::size_t>(j)])];
       for (int a = 0; a < 3; ++a) {
         box.lo[a] = std::min(box.lo[a], p[a]);
         box.hi[a] = std::max(box.hi[a], p[a]);
       }
     }
-    tri[3] = (rank[static_cast<std::size_t>(bf.tet)] << 2) | bf.face;
-    triangles.push_back(tri);
-    boxes.push_back(box);
   }
   std::vector<std::int32_t> leaf_order;
   BvhBuilder(boxes, static_cast<float>(1e-5 * std::max(g.diagonal, 1e-30)), g.nodes, leaf_order);
-  g.triangles.resize(triangles.size());
-  for (std::size_t i = 0; i < leaf_order.size(); ++i) g.triangles[i] = triangles[static_cast<std::size_t>(leaf_order[i])];
-  return g;
+  g.triangles.resize(g.boundary.size());
+  for (std::size_t i = 0; i < leaf_order.size(); ++i) g.triangles[i] = g.boundary[static_cast<std::size_t>(leaf_order[i])];
 }
 
 }  // namespace penumbra::render::gpu

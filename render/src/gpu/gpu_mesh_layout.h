@@ -30,7 +30,9 @@ struct GpuMeshLayout {
   std::vector<std::array<std::int32_t, 4>> tet_vertices; ///< point ids, tets in Morton order
   /// Per face k: (neighbour << 2 | index of the shared face in the neighbour), -1 on the boundary.
   std::vector<std::array<std::int32_t, 4>> tet_next;
-  /// Boundary triangles, outward vertex order, then (tet << 2 | face); in BVH leaf order.
+  /// Boundary triangles, outward vertex order, then (tet << 2 | face); in the mesh's boundary
+  /// order (what moved points keep) and in BVH leaf order (what the shader reads).
+  std::vector<std::array<std::int32_t, 4>> boundary;
   std::vector<std::array<std::int32_t, 4>> triangles;
   std::vector<BvhNode> nodes;
 };
@@ -39,5 +41,10 @@ struct GpuMeshLayout {
 /// touch nearby memory), boundary faces under a BVH of median splits. Throws
 /// Error(invalid_argument) when the mesh exceeds the int32 indexing (2^29 tets).
 GpuMeshLayout build_gpu_mesh_layout(const TetMesh& mesh);
+
+/// Re-places `layout` at the points of `moved`, the same mesh with its points moved
+/// (move_tet_mesh): frame, diagonal, points, the BVH and the triangles' leaf order. The tets, their
+/// adjacency and their Morton order (of the first positions: only locality depends on it) are kept.
+void place_gpu_mesh_points(const TetMesh& moved, GpuMeshLayout& layout);
 
 }  // namespace penumbra::render::gpu

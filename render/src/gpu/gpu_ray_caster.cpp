@@ -3,6 +3,7 @@
 #include "penumbra/render/gpu_ray_caster.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -43,6 +44,8 @@ struct GpuRayCaster::Impl {
   LocalFrame frame;    ///< of the mesh: every float32 position and length the shader sees
   double diagonal = 0;  ///< of the mesh's bounds, in the frame
   std::size_t triangle_count = 0;
+  /// The boundary triangles in the mesh's boundary order, kept to rebuild the BVH for moved points.
+  std::vector<std::array<std::int32_t, 4>> boundary;
   GLuint buffers[kBindingCount] = {};
   std::size_t capacity[kBindingCount] = {};
   /// What a per-frame buffer holds on the device, so that only changed blocks are sent again.
@@ -150,6 +153,7 @@ GpuRayCaster::GpuRayCaster(std::shared_ptr<GpuDevice> device, std::shared_ptr<co
   m.frame = layout.frame;
   m.diagonal = layout.diagonal;
   m.triangle_count = layout.triangles.size();
+  m.boundary = layout.boundary;
 
   GpuMemoryStats& s = m.stats;
   s.tets = layout.tet_vertices.size();
@@ -318,6 +322,31 @@ void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunct
     throw Error(err == GL_OUT_OF_MEMORY ? ErrorCode::out_of_memory : ErrorCode::internal_error,
                 "GpuRayCaster::render: OpenGL reported " + gpu::gl_error_text(err));
   out.runs = with_runs ? detail::flatten_runs(runs) : RayRuns{};
+}
+
+void GpuRayCaster::move_points(std::shared_ptr<const TetMesh> moved) {
+  Impl& m = *m_impl;
+  detail::require_same_connectivity("GpuRayCaster::move_points", *m.mesh, moved.get());
+  gpu::GpuMeshLayout layout;
+  layout.boundary = std::move(m.boundary);
+  gpu::place_gpu_mesh_points(*moved, layout);
+  m.boundary = std::move(layout.boundary);
+  CurrentContext current(m.dev());
+  const GlApi& gl = current.gl();
+  // Same point and triangle counts, and a BVH of as many nodes (median splits of as many boxes):
+  // the buffers keep their size.
+  gl.NamedBufferSubData(m.buffers[kPoints], 0, static_cast<GLsizeiptr>(layout.points.size() * sizeof(float)),
+                        layout.points.data());
+  gl.NamedBufferSubData(m.buffers[kTriangles], 0, static_cast<GLsizeiptr>(layout.triangles.size() * 16),
+                        layout.triangles.data());
+  gl.NamedBufferSubData(m.buffers[kNodes], 0, static_cast<GLsizeiptr>(layout.nodes.size() * sizeof(gpu::BvhNode)),
+                        layout.nodes.data());
+  const GLenum err = gl.GetError();
+  if (err != GL_NO_ERROR)
+    throw Error(ErrorCode::internal_error, "GpuRayCaster::move_points: OpenGL reported " + gpu::gl_error_text(err));
+  m.mesh = std::move(moved);
+  m.frame = layout.frame;
+  m.diagonal = layout.diagonal;
 }
 
 GpuMemoryStats GpuRayCaster::memory() const { return m_impl->stats; }

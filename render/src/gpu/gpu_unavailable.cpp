@@ -29,6 +29,7 @@ GpuRayCaster::~GpuRayCaster() = default;
 Image GpuRayCaster::render(const std::vector<float>&, const TransferFunction&, const Camera&, const RenderOptions&) {
   unavailable();
 }
+void GpuRayCaster::move_points(std::shared_ptr<const TetMesh>) { unavailable(); }
 GpuMemoryStats GpuRayCaster::memory() const { unavailable(); }
 std::size_t GpuRayCaster::last_scalar_upload_bytes() const { unavailable(); }
 void GpuRayCaster::render(const std::vector<float>&, const TransferFunction&, const Camera&, const RenderOptions&,

@@ -50,23 +50,8 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
   });
   for (std::size_t p = 0; p < np; ++p) edge_offsets[p + 1] = edge_offsets[p] + counts[p];
   edge_ids.resize(static_cast<std::size_t>(edge_offsets[np]));
-  double sum = 0, smallest = HUGE_VAL;
-  std::size_t edges = 0;
-  longest_edge.assign(np, 0.0f);
-  for (std::size_t p = 0; p < np; ++p) {
-    std::copy(chunks[p].begin(), chunks[p].end(), edge_ids.begin() + edge_offsets[p]);
-    for (std::int32_t q : chunks[p]) {
-      const double d = length(mesh.points[static_cast<std::size_t>(q)] - mesh.points[p]);
-      longest_edge[p] = std::max(longest_edge[p], static_cast<float>(d));
-      if (static_cast<std::size_t>(q) < p) continue;  // each edge once
-      if (!(d > 0)) continue;
-      sum += d;
-      smallest = std::min(smallest, d);
-      ++edges;
-    }
-  }
-  mean_edge = edges ? sum / static_cast<double>(edges) : 0.0;
-  min_edge = edges ? smallest : 0.0;
+  for (std::size_t p = 0; p < np; ++p) std::copy(chunks[p].begin(), chunks[p].end(), edge_ids.begin() + edge_offsets[p]);
+  measure_edges(mesh);
   const std::vector<std::int32_t> order = detail::morton_order(mesh);
   std::vector<std::int32_t> record_of(nt);  // tet id -> its walk record
   for (std::size_t i = 0; i < order.size(); ++i) record_of[static_cast<std::size_t>(order[i])] = static_cast<std::int32_t>(i);
@@ -80,6 +65,26 @@ Level1Topology::Level1Topology(const TetMesh& mesh) {
       for (int j = 0; j < 3; ++j) star[s].v[j] = mesh.tets[t][detail::kFaceVertices[k][j]];
     }
   });
+}
+
+void Level1Topology::measure_edges(const TetMesh& mesh) {
+  const std::size_t np = mesh.points.size();
+  double sum = 0, smallest = HUGE_VAL;
+  std::size_t edges = 0;
+  longest_edge.assign(np, 0.0f);
+  for (std::size_t p = 0; p < np; ++p)
+    for (auto e = edge_offsets[p]; e < edge_offsets[p + 1]; ++e) {
+      const auto q = static_cast<std::size_t>(edge_ids[static_cast<std::size_t>(e)]);
+      const double d = length(mesh.points[q] - mesh.points[p]);
+      longest_edge[p] = std::max(longest_edge[p], static_cast<float>(d));
+      if (q < p) continue;  // each edge once
+      if (!(d > 0)) continue;
+      sum += d;
+      smallest = std::min(smallest, d);
+      ++edges;
+    }
+  mean_edge = edges ? sum / static_cast<double>(edges) : 0.0;
+  min_edge = edges ? smallest : 0.0;
 }
 
 void Level1Field::build(const std::vector<float>& point_scalars, const TransferFunction& tf) {

@@ -36,6 +36,10 @@ struct Level1Topology {
   double min_edge = 0.0;
 
   explicit Level1Topology(const TetMesh& mesh);
+  /// The edge lengths (longest_edge, mean_edge, min_edge) at `mesh`'s points: all that depends on
+  /// the positions (the walk records keep the Morton order of the first positions: only
+  /// locality depends on it), so a mesh whose points moved keeps the rest.
+  void measure_edges(const TetMesh& mesh);
   Level1Topology() = default;
 };
 

@@ -106,17 +106,36 @@ struct LightVolume::Impl {
         opt(std::move(options)),
         topology(*mesh),
         combination(mesh->points.size()) {
+    lighting::CpuLightSolver* cpu = make_solver();
+    build_grid();
+    if (cpu) prime(*cpu);
+  }
+
+  // The solver of the mesh as it is now: on opt.device, else on the CPU (returned, for priming).
+  lighting::CpuLightSolver* make_solver() {
     const std::vector<float> weights = lighting::scatter_weights(*mesh, topology);
     if (opt.device) {
       solver = std::make_unique<lighting::DeviceLightSolver>(opt.device, *mesh, topology, weights, opt.occluders);
-      build_grid();
-      return;
+      return nullptr;
     }
     auto cpu = std::make_unique<lighting::CpuLightSolver>(*mesh, topology, weights);
-    lighting::CpuLightSolver& primed = *cpu;
+    lighting::CpuLightSolver* made = cpu.get();
     solver = std::move(cpu);
+    return made;
+  }
+
+  // The same mesh with its points moved: the point order, the walk records and each light's
+  // solution are kept; the edge lengths, the solver (its copy of the mesh and the scattering
+  // weights) and the level-0 grid follow the points. Every light then starts again from its level-0
+  // solve, as a light that moved does, with its level-1 solution as the warm start
+  // (LightState::take_level0); the recorded walks are forgotten and the start tets become hints.
+  void move_to(const TetMesh& moved) {
+    mesh = std::make_shared<const TetMesh>(detail::with_points_in_order(moved, point_order));
+    topology.measure_edges(*mesh);
+    for (auto& l : lights) l.solver_data.reset();  // the old solver's buffers
+    if (first_light_ready) first_light.solver_data.reset();
+    make_solver();
     build_grid();
-    prime(primed);
   }
 
   bool scatters() const { return opt.sigma_s[0] > 0 || opt.sigma_s[1] > 0 || opt.sigma_s[2] > 0; }
@@ -328,6 +347,16 @@ LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions
 LightVolume::~LightVolume() = default;
 LightVolume::LightVolume(LightVolume&&) noexcept = default;
 LightVolume& LightVolume::operator=(LightVolume&&) noexcept = default;
+
+void LightVolume::move_points(std::shared_ptr<const TetMesh> moved) {
+  Impl& im = *m_impl;
+  require(moved != nullptr, "LightVolume::move_points: mesh is null; expected the moved mesh (move_tet_mesh)");
+  require(moved->points.size() == im.mesh->points.size() && moved->tet_count() == im.mesh->tet_count(),
+          "LightVolume::move_points: the moved mesh has " + std::to_string(moved->points.size()) + " points and " +
+              std::to_string(moved->tet_count()) + " tets; the volume's has " + std::to_string(im.mesh->points.size()) +
+              " and " + std::to_string(im.mesh->tet_count()) + ": make a new volume for a new mesh");
+  im.move_to(*moved);
+}
 
 void LightVolume::set_field(const std::vector<float>& point_scalars, const TransferFunction& tf) {
   Impl& im = *m_impl;

@@ -79,28 +79,6 @@ TEST(Context, UnchangedTopologyVersionSkipsPreparation) {
   EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
 }
 
-// A moving mesh republished under its old topology_version would render its old positions: the
-// republish compares the points and names the first that moved.
-TEST(Context, PointsThatMovedUnderAnUnchangedTopologyVersionAreRefused) {
-  TempDir tmp;
-  Scene s;
-  Context ctx(parse_config(testing::small_config(tmp / "db")));
-  ctx.publish_mesh(s.mesh.view());
-  ctx.publish_mesh(s.mesh.view());  // the same points: accepted
-  s.mesh.xyz[3 * 17 + 1] += 1e-9;
-  try {
-    ctx.publish_mesh(s.mesh.view());
-    ADD_FAILURE() << "expected the moved point to be refused";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::invalid_argument);
-    for (const char* part : {"point 17 moved", "topology_version 1 is unchanged", "bump topology_version"})
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
-  }
-  s.mesh.topology_version = 2;
-  ctx.publish_mesh(s.mesh.view());
-  EXPECT_EQ(ctx.mesh_preparations(), 2u);
-}
-
 // A solver's x[], y[], z[] published as three arrays give the picture of the interleaved points.
 TEST(Context, ThreeCoordinateArraysRenderLikeInterleavedPoints) {
   TempDir tmp;

@@ -27,6 +27,10 @@ inline constexpr double kMaxMeshOffset = 1e9;
 /// re-orients them. `call` prefixes the message.
 void validate_mesh(const MeshView& mesh, const char* call);
 
+/// The point checks of validate_mesh alone (a NaN/Inf coordinate, the extent and offset limits),
+/// for points that moved under a mesh already validated; returns the points' bounds.
+Bounds validate_points(const MeshView& mesh, const char* call);
+
 }  // namespace penumbra
 
 PNB_PUBLIC_END

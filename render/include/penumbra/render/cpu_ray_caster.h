@@ -46,6 +46,9 @@ public:
 
   const TetMesh& mesh() const override;
   const char* backend() const override { return "cpu"; }
+  /// Keeps the walk's records and orders (Morton orders of the first positions: only locality
+  /// depends on them) and re-places the points and the boundary's BVH. Not concurrent with render().
+  void move_points(std::shared_ptr<const TetMesh> moved) override;
 
 private:
   struct Impl;

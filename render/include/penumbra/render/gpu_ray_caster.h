@@ -97,6 +97,9 @@ public:
   std::size_t last_scalar_upload_bytes() const;
   const TetMesh& mesh() const override;
   const char* backend() const override { return "gpu"; }
+  /// Keeps the tets, their adjacency and Morton order on the device and sends the moved points
+  /// and the boundary's new BVH (the points' and the BVH's bytes).
+  void move_points(std::shared_ptr<const TetMesh> moved) override;
   const GpuDevice& device() const;
 
 private:

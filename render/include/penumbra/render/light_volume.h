@@ -147,6 +147,11 @@ public:
   /// New per-point scalars (NaN = no data, zero extinction) or transfer function: resamples
   /// level 0 and marks every light changed. Throws penumbra::Error on bad input.
   void set_field(const std::vector<float>& point_scalars, const TransferFunction& tf);
+  /// The same mesh with its points moved (move_tet_mesh; a Lagrangian mesh a step later): the
+  /// level-0 grid, the edge lengths and the solver's geometry follow the points, and every light
+  /// is solved again like a light that moved, its level-1 solution kept as the warm start.
+  /// Throws Error(invalid_argument) when `moved` is null or has other point or tet counts.
+  void move_points(std::shared_ptr<const TetMesh> moved);
   /// Replaces the lights; only lights that differ from the previous list at the same index are
   /// recomputed (a colour-only change just recombines).
   void set_lights(std::vector<Light> lights);

@@ -60,6 +60,11 @@ public:
   virtual void render(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
                       const RenderOptions& options, RenderOutput& out) = 0;
   virtual const TetMesh& mesh() const = 0;
+  /// The same mesh with its points moved (move_tet_mesh of mesh(), e.g. a Lagrangian mesh a step
+  /// later): what depends on the positions is rebuilt, what depends on the connectivity alone is
+  /// kept, and the pictures are those of a renderer made for `moved`. Throws
+  /// Error(invalid_argument) when `moved` is null or has another connectivity.
+  virtual void move_points(std::shared_ptr<const TetMesh> moved) = 0;
   /// "cpu" or "gpu".
   virtual const char* backend() const = 0;
 };

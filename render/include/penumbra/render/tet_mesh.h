@@ -40,6 +40,8 @@ struct TetMesh {
   Bounds bounds;
   LocalFrame frame;                  ///< where float32 copies of the mesh live (the GPU paths)
   std::size_t welded_points = 0;     ///< duplicate points merged for adjacency
+  /// The merged points as (point, the first point at its coordinates), for move_tet_mesh.
+  std::vector<std::array<std::int32_t, 2>> welds;
   std::size_t reoriented_tets = 0;   ///< input tets whose orientation was flipped
   /// The tets' total volume and the volume the boundary faces enclose (divergence theorem). They
   /// agree to rounding for a valid tessellation; where they differ, the mesh is tangled (cells
@@ -56,6 +58,20 @@ struct TetMesh {
 /// Prepares `mesh` for rendering; validates it first (see validate_mesh) and throws
 /// penumbra::Error(invalid_argument) naming the offending cell or point. `call` prefixes errors.
 TetMesh prepare_tet_mesh(const MeshView& mesh, const char* call = "prepare_tet_mesh");
+
+/// Whether the points of `moved` (the mesh of `prepared` with its points moved) keep every weld
+/// of `prepared`: the points merged for adjacency still coincide. When they do not (an interface
+/// that opened), the mesh's adjacency changed and it must be prepared anew.
+bool keeps_welds(const TetMesh& prepared, const MeshView& moved);
+
+/// `prepared` with the point coordinates of `moved`, the same mesh a step later in a Lagrangian
+/// or ALE code: what depends on the connectivity alone (the split into tets, their orientation,
+/// the adjacency, the boundary faces, the welds) is kept; the bounds, the frame, the volumes and
+/// the boundary surface follow the points. Throws penumbra::Error(invalid_argument) for a NaN or
+/// infinite coordinate or an extent beyond validate_mesh's limits, and naming the input cell
+/// when the motion inverted or flattened one of its tets; requires keeps_welds(prepared, moved)
+/// and the same point count. `call` prefixes errors.
+TetMesh move_tet_mesh(const TetMesh& prepared, const MeshView& moved, const char* call = "move_tet_mesh");
 
 }  // namespace penumbra::render
 
