@@ -383,9 +383,28 @@ LightingConfig parse_lighting(const json& j, const std::string& path) {
   return l;
 }
 
+// "lossless", or {"altitude_fraction": f}: how a moving mesh's coordinates are kept.
+CoordinateStoreConfig parse_coordinates(const json& j, const std::string& path) {
+  CoordinateStoreConfig c;
+  if (j.is_string()) {
+    if (j.get<std::string>() != "lossless") fail(path, "must be \"lossless\" or {\"altitude_fraction\": f}");
+    c.lossless = true;
+    return c;
+  }
+  if (!j.is_object()) fail(path, "must be \"lossless\" or {\"altitude_fraction\": f}");
+  only_keys(j, path, {"altitude_fraction"});
+  if (const json* f = find(j, "altitude_fraction")) {
+    c.altitude_fraction = number(*f, child(path, "altitude_fraction"));
+    if (!(c.altitude_fraction > 0 && c.altitude_fraction <= 0.125))
+      fail(child(path, "altitude_fraction"), "must be in (0, 0.125]: a point moved by a quarter of the thinnest altitude can invert a cell");
+  }
+  return c;
+}
+
 StoreConfig parse_store(const json& j, const std::string& path) {
   only_keys(j, path,
-            {"directory", "every_cycles", "window", "codebook_size", "error_bound", "entropy_level", "memory_budget_mb"});
+            {"directory", "every_cycles", "window", "codebook_size", "error_bound", "entropy_level", "memory_budget_mb",
+             "coordinates"});
   StoreConfig s;
   const json* dir = find(j, "directory");
   if (!dir) fail(child(path, "directory"), "is required");
@@ -413,6 +432,7 @@ StoreConfig parse_store(const json& j, const std::string& path) {
     s.codec.entropy_level = static_cast<int>(integer(*e, child(path, "entropy_level"), 0, compression::kMaxEntropyLevel));
   if (const json* m = find(j, "memory_budget_mb"))
     s.memory_budget_bytes = static_cast<std::uint64_t>(integer(*m, child(path, "memory_budget_mb"), 1, 1 << 24)) << 20;
+  if (const json* c = find(j, "coordinates")) s.coordinates = parse_coordinates(*c, child(path, "coordinates"));
   return s;
 }
 

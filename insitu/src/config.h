@@ -84,8 +84,16 @@ struct LightingConfig {
 };
 
 /// The run's compressed field history (insitu/README.md, "store").
+/// How a store keeps the coordinates of a mesh whose points move (coordinate_store.h).
+struct CoordinateStoreConfig {
+  bool lossless = false;  ///< every step's coordinates exactly, in float64
+  /// Else compressed, every point within this fraction of the thinnest cell's altitude.
+  double altitude_fraction = 1.0 / 64;
+};
+
 struct StoreConfig {
   std::string directory;
+  CoordinateStoreConfig coordinates;
   std::int64_t every_cycles = 1;  ///< record the rendered fields at every Nth cycle
   compression::CodecParams codec;
   std::uint64_t memory_budget_bytes = 0;  ///< 0: what two windows of every field need

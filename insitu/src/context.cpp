@@ -291,7 +291,7 @@ void Context::move_points(const MeshView& mesh) {
   p.tets = std::move(moved);
   place_views();
   ++m_geometry_updates;
-  if (m_store) m_store->begin_segment(p.view);  // the moved coordinates: a segment of their own
+  if (m_store) m_store->points_moved();
 }
 
 void Context::publish_field(const FieldView& field, bool copy) {
@@ -510,6 +510,13 @@ bool Context::execute(double time, std::int64_t cycle) {
 }
 
 void Context::store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures) {
+  if (m_store->points_move()) {
+    try {
+      m_store->record_points(time, cycle, m_mesh->tets->points, render::smallest_altitude(*m_mesh->tets));
+    } catch (const Error& e) {
+      failures.add(e);
+    }
+  }
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     if (m_fields.find(m_config.fields[i].name) == m_fields.end()) continue;  // reported when the step renders
     try {

@@ -10,6 +10,8 @@
 #include <fstream>
 
 #include "penumbra/core/error.h"
+#include "coordinate_store.h"
+#include "steps_csv.h"
 #include "stored_mesh.h"
 
 namespace penumbra::insitu {
@@ -53,6 +55,8 @@ void FieldStore::begin_segment(const MeshView& mesh) {
   finish();
   m_encoders.clear();
   m_steps.clear();
+  m_moving = false;
+  m_coordinates.reset();
   ++m_segment;
   char name[32];
   std::snprintf(name, sizeof name, "segment-%03d", m_segment);
@@ -63,6 +67,16 @@ void FieldStore::begin_segment(const MeshView& mesh) {
   m_point_count = mesh.point_count();
   write_stored_mesh(m_segment_dir + "/mesh.pnbm", copy_mesh(mesh));
   write_steps();
+}
+
+void FieldStore::record_points(double time, std::int64_t cycle, const std::vector<Vec3d>& points, double thinnest_altitude) {
+  if (m_segment_dir.empty()) throw Error(ErrorCode::invalid_operation, "store: no mesh published yet");
+  if (!m_coordinates) m_coordinates = std::make_unique<CoordinateWriter>(m_segment_dir + "/coordinates", m_point_count, m_config);
+  try {
+    m_coordinates->record(time, cycle, points, thinnest_altitude);
+  } catch (const Error& e) {
+    throw Error(e.code(), "store: the coordinates at cycle " + std::to_string(cycle) + ": " + e.what());
+  }
 }
 
 void FieldStore::record(const std::string& field, double time, std::int64_t cycle, const std::vector<double>& values) {
@@ -95,27 +109,17 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
   }
 }
 
-void FieldStore::write_steps() {
-  // Rewritten whole and renamed into place: a reader never sees a half-written list.
-  const std::string path = m_segment_dir + "/steps.csv", tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << "cycle,time\n";
-    char line[64];
-    for (const auto& [cycle, time] : m_steps) {
-      std::snprintf(line, sizeof line, "%lld,%.17g\n", static_cast<long long>(cycle), time);
-      out << line;
-    }
-    out.flush();
-    if (!out) throw Error(ErrorCode::io_error, "store: cannot write '" + tmp + "' (disk full?)");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(ErrorCode::io_error, "store: cannot rename '" + tmp + "': " + ec.message());
-}
+void FieldStore::write_steps() { write_steps_csv(m_segment_dir + "/steps.csv", m_steps); }
 
 void FieldStore::finish() {
   std::string failures;
+  if (m_coordinates) {
+    try {
+      m_coordinates->finish();
+    } catch (const Error& e) {
+      failures = e.what();
+    }
+  }
   for (auto& [name, enc] : m_encoders) {
     try {
       enc->finish();

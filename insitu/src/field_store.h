@@ -14,11 +14,14 @@
 
 namespace penumbra::insitu {
 
+class CoordinateWriter;
+
 /// Keeps every recorded step of the rendered fields, compressed (compression::StreamingEncoder:
 /// a window is trained and written on a background thread while the solver goes on). The store
 /// directory holds one `segment-NNN` folder per mesh topology, each with `mesh.pnbm`, one
 /// `<field>.pnbf` per field (`.partial` until finish) and `steps.csv` (cycle, time). A run that
-/// dies leaves every finished window readable (insitu::StoredRun).
+/// dies leaves every finished window readable (insitu::StoredRun). A segment whose points move
+/// (one topology) also holds their coordinates per recorded step (`coordinates/`, CoordinateWriter).
 class FieldStore {
 public:
   /// Creates the store directory; throws Error(io_error) when it cannot be created.
@@ -38,6 +41,13 @@ public:
   /// for NaN/Inf values and for a step that drifted beyond what its window's map holds: that step
   /// of that field is then not stored.
   void record(const std::string& field, double time, std::int64_t cycle, const std::vector<double>& values);
+  /// The mesh's points moved under its topology: from now on the segment keeps the coordinates
+  /// of every recorded step (record_points), and a replay moves the points with them.
+  void points_moved() { m_moving = true; }
+  bool points_move() const { return m_moving; }
+  /// Keeps the coordinates at a recorded step (CoordinateWriter); `thinnest_altitude` is the
+  /// mesh's smallest tet altitude now. Throws Error naming the step when they cannot be kept.
+  void record_points(double time, std::int64_t cycle, const std::vector<Vec3d>& points, double thinnest_altitude);
   /// Completes every file of the current segment. Idempotent.
   void finish();
 
@@ -49,6 +59,8 @@ private:
   std::uint64_t m_point_count = 0;
   std::map<std::string, std::unique_ptr<compression::StreamingEncoder>> m_encoders;
   std::vector<std::pair<std::int64_t, double>> m_steps;
+  bool m_moving = false;
+  std::unique_ptr<CoordinateWriter> m_coordinates;  ///< made at the first moving step
 };
 
 }  // namespace penumbra::insitu

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// insitu/src/steps_csv.h -- the store's step list, steps.csv, read back
+// insitu/src/steps_csv.h -- the store's step lists (steps.csv), written and read back
 #pragma once
 #include <cstdint>
 #include <istream>
@@ -14,5 +14,9 @@ namespace penumbra::insitu {
 /// Throws Error(io_error) naming `source` and the line that is not `cycle,time` with an integer
 /// cycle and a finite time.
 std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, const std::string& source);
+
+/// Writes `steps` to `path` in that form, whole, through a temporary file renamed into place, so
+/// that a reader never sees a half-written list. Throws Error(io_error) naming the file.
+void write_steps_csv(const std::string& path, const std::vector<std::pair<std::int64_t, double>>& steps);
 
 }  // namespace penumbra::insitu

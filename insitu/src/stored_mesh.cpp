@@ -8,19 +8,13 @@
 #include <fstream>
 #include <iterator>
 
+#include "checksum.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::insitu {
 namespace {
 
 constexpr char kMagic[8] = {'P', 'N', 'B', 'M', 'E', 'S', 'H', '1'};
-
-// FNV-1a, 64 bit: catches truncation and bit rot; not a security measure.
-std::uint64_t fnv1a(const unsigned char* p, std::size_t n) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  return h;
-}
 
 template <class T>
 void put(std::vector<unsigned char>& out, const T* data, std::size_t n) {

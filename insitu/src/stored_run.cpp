@@ -12,6 +12,7 @@
 #include "penumbra/compression/field_file.h"
 #include "penumbra/compression/pager.h"
 #include "penumbra/core/error.h"
+#include "coordinate_history.h"
 #include "steps_csv.h"
 #include "stored_mesh.h"
 
@@ -27,23 +28,8 @@ struct StoredRun::Impl {
   };
   std::map<std::string, Field> fields;
   std::vector<std::pair<std::int64_t, double>> steps;
+  std::unique_ptr<CoordinateHistory> coordinates;
 };
-
-std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, const std::string& source) {
-  std::vector<std::pair<std::int64_t, double>> steps;
-  std::string line;
-  std::getline(in, line);
-  for (int row = 2; std::getline(in, line); ++row) {
-    long long cycle = 0;
-    double time = 0;
-    char comma = 0;
-    std::istringstream ls(line);
-    if (!(ls >> cycle >> comma >> time) || comma != ',' || !std::isfinite(time))
-      throw Error(ErrorCode::io_error, source + " line " + std::to_string(row) + " is not 'cycle,time'");
-    steps.emplace_back(cycle, time);
-  }
-  return steps;
-}
 
 StoredRun::StoredRun() : m_impl(std::make_unique<Impl>()) {}
 StoredRun::~StoredRun() = default;
@@ -79,15 +65,29 @@ std::unique_ptr<StoredRun> StoredRun::open(const std::string& dir) {
     im.fields[file->info().name] = std::move(f);
   }
   std::sort(im.names.begin(), im.names.end());
-  // Steps every field can give (a run that died keeps only whole windows).
+  im.coordinates = std::make_unique<CoordinateHistory>(dir, im.view.point_count());
+  // Steps every field can give (a run that died keeps only whole windows), and where the points
+  // moved, whose coordinates are kept.
   std::size_t usable = im.steps.size();
   for (const auto& [name, f] : im.fields) usable = std::min<std::size_t>(usable, f.file->step_count());
+  const CoordinateHistory& c = *im.coordinates;
+  while (usable > 0 && c.moving() && im.steps[usable - 1].second >= c.first_time() && !c.has(im.steps[usable - 1].second))
+    --usable;
   im.steps.resize(usable);
   return run;
 }
 
 const MeshView& StoredRun::mesh() const { return m_impl->view; }
 const std::vector<std::string>& StoredRun::fields() const { return m_impl->names; }
+bool StoredRun::points_move() const { return m_impl->coordinates->moving(); }
+
+void StoredRun::read_points(std::size_t step, std::vector<double>& xyz) {
+  require(step < step_count(), "stored run: step " + std::to_string(step) + " is beyond the " +
+                                   std::to_string(step_count()) + " stored steps");
+  const CoordinateHistory& c = *m_impl->coordinates;
+  if (c.moving() && time(step) >= c.first_time()) return m_impl->coordinates->read(time(step), xyz);
+  xyz = m_impl->mesh.xyz;
+}
 std::size_t StoredRun::step_count() const { return m_impl->steps.size(); }
 double StoredRun::time(std::size_t step) const { return m_impl->steps.at(step).second; }
 std::int64_t StoredRun::cycle(std::size_t step) const { return m_impl->steps.at(step).first; }

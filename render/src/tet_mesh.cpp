@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <string>
 #include <unordered_map>
 
@@ -243,6 +244,27 @@ TetMesh prepare_tet_mesh(const MeshView& view, const char* call) {
   m.surface = make_surface(m, canon);
   measure_volumes(m);
   return m;
+}
+
+double smallest_altitude(const TetMesh& m) {
+  std::mutex mutex;
+  double smallest = HUGE_VAL;
+  parallel_for(m.tets.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    double local = HUGE_VAL;
+    for (std::size_t t = b; t < e; ++t) {
+      Vec3d p[4];
+      for (int k = 0; k < 4; ++k) p[k] = m.points[static_cast<std::size_t>(m.tets[t][static_cast<std::size_t>(k)])] - m.frame.center;
+      const double v6 = signed_volume6(p[0], p[1], p[2], p[3]);
+      // 6V = |face normal| x altitude for each face: the largest face gives the smallest altitude.
+      double largest = 0;
+      for (const auto& f : kFaceVertices)
+        largest = std::max(largest, length(cross(p[f[1]] - p[f[0]], p[f[2]] - p[f[0]])));
+      if (largest > 0) local = std::min(local, v6 / largest);
+    }
+    const std::lock_guard lock(mutex);
+    smallest = std::min(smallest, local);
+  });
+  return smallest;
 }
 
 bool keeps_welds(const TetMesh& prepared, const MeshView& moved) {

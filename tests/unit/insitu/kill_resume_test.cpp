@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/kill_resume_test.cpp -- a database left by a SIGKILLed solver is valid and resumable
 #include <gtest/gtest.h>
+
+#include <filesystem>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -11,6 +13,7 @@
 
 #include "cinema_database.h"
 #include "database_checks.h"
+#include "fixtures/meshes.h"
 #include "penumbra/insitu/stored_run.h"
 #include "penumbra/core/error.h"
 #include "test_util.h"
@@ -24,10 +27,10 @@ using testing::TempDir;
 
 /// Starts the helper solver; returns its pid.
 pid_t spawn_solver(const std::string& dir, long first, long steps, const char* if_exists,
-                   const std::string& store = "") {
+                   const std::string& store = "", bool moving = false) {
   const std::string f = std::to_string(first), s = std::to_string(steps);
   const char* argv[] = {PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists,
-                        store.empty() ? nullptr : store.c_str(), nullptr};
+                        store.empty() ? nullptr : store.c_str(), moving ? "moving" : nullptr, nullptr};
   pid_t pid = -1;
   if (posix_spawn(&pid, PNB_KILL_HELPER, nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
   return pid;
@@ -97,6 +100,35 @@ TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
     EXPECT_EQ(run->cycle(s), static_cast<std::int64_t>(s));
     run->read("T", s, values);
     EXPECT_EQ(values.size(), run->mesh().point_count());
+  }
+}
+
+// A Lagrangian run killed mid-window: its one segment reopens with the steps whose fields and
+// coordinates are both whole, each step's points where the solver had them (within the bound).
+TEST(KillSafety, StoreOfAKilledMovingSolverReopens) {
+  TempDir tmp;
+  const std::string dir = tmp / "db", store = tmp / "store";
+  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store, true);
+  ASSERT_GT(pid, 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (listed_rows(dir) < 6 * 20 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  kill(pid, SIGKILL);
+  ASSERT_TRUE(WIFSIGNALED(wait_exit(pid))) << "the solver ended before it was killed";
+  EXPECT_FALSE(std::filesystem::exists(store + "/segment-001"));
+  auto run = StoredRun::open(store + "/segment-000");
+  ASSERT_TRUE(run->points_move());
+  EXPECT_GE(run->step_count(), 8u);  // the first windows of the fields and of the coordinates
+  const auto base = fixtures::block(fixtures::BlockCells::tets, 6, 6, 6, {0, 0, 0}, {1, 1, 1});
+  std::vector<double> xyz;
+  for (std::size_t s = 0; s < run->step_count(); ++s) {
+    auto mesh = base;
+    fixtures::swirl(mesh, {0.5, 0.5, 0}, 0.6, 0.01 * static_cast<double>(s));
+    run->read_points(s, xyz);
+    ASSERT_EQ(xyz.size(), mesh.xyz.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < xyz.size(); ++i) worst = std::max(worst, std::fabs(xyz[i] - mesh.xyz[i]));
+    EXPECT_LT(worst, 1e-2) << "step " << s;  // the bound: 1/16 of a 1/6-cube tet's altitude
   }
 }
 

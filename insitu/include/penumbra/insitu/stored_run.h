@@ -15,9 +15,9 @@ PNB_PUBLIC_BEGIN
 
 namespace penumbra::insitu {
 
-/// One segment of a store directory: the mesh the solver published (one topology) and one
-/// compressed file per stored field, all over the same steps. A segment of a run that died is
-/// read up to its last complete page.
+/// One segment of a store directory: the mesh the solver published (one topology), its
+/// coordinates at each step when its points moved, and one compressed file per stored field, all
+/// over the same steps. A segment of a run that died is read up to its last complete page.
 class StoredRun {
 public:
   /// Opens `segment_dir` (a `segment-NNN` folder of a store directory). Throws penumbra::Error
@@ -29,6 +29,12 @@ public:
 
   /// The stored mesh, valid as long as this object.
   const MeshView& mesh() const;
+  /// Whether the mesh's points move in this segment (a Lagrangian or ALE run, one topology): each
+  /// step then has its own coordinates (read_points).
+  bool points_move() const;
+  /// The coordinates at `step`, xyz per point (the mesh's own before the points began to move).
+  /// Throws penumbra::Error naming the file for a corrupt record.
+  void read_points(std::size_t step, std::vector<double>& xyz);
   /// Stored field names, sorted.
   const std::vector<std::string>& fields() const;
   /// Steps stored for every field (the shortest field's count when a run died mid-window).

@@ -59,6 +59,11 @@ struct TetMesh {
 /// penumbra::Error(invalid_argument) naming the offending cell or point. `call` prefixes errors.
 TetMesh prepare_tet_mesh(const MeshView& mesh, const char* call = "prepare_tet_mesh");
 
+/// The smallest altitude of the mesh's tets (a vertex's distance from the plane of the face
+/// opposite it): how thin the thinnest cell is. Moving every point by less than a quarter of it
+/// cannot invert a cell, to first order in the motion.
+double smallest_altitude(const TetMesh& mesh);
+
 /// Whether the points of `moved` (the mesh of `prepared` with its points moved) keep every weld
 /// of `prepared`: the points merged for adjacency still coincide. When they do not (an interface
 /// that opened), the mesh's adjacency changed and it must be prepared anew.

@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// bench/moving/moving_bench.cpp -- a mesh whose points move every step, through the C API: the
+// geometry update (same topology_version) against a full preparation (a new version each step)
+//
+// Usage: pnb_bench_moving --scene NAME --data-dir DIR [--frames N] [--size WxH]
+//        [--backends "cpu gpu"] [--lighting "none light-volume"]
+// Prints one JSON line per backend and lighting, bench "moving":
+//   geometry_update_ms   median pnb_publish_mesh of the moved points under the same version
+//   full_prepare_ms      median pnb_publish_mesh of the same points as a new topology (the path a
+//                        moving mesh took before geometry updates), in the same steps
+//   update_ratio         geometry_update_ms / full_prepare_ms
+//   rms_pct, max_level_diff  the last step's image (one camera) of the two runs: RMS in % of 255
+//                        and the largest channel difference; with the light volume both runs
+//                        solve the light to convergence each step
+//   step_ms, full_step_ms  median pnb_execute of each run (the light volume's solve included)
+// The points move by a swirl about the mesh's vertical axis (a vortex in a Lagrangian code): step
+// k rotates a point at distance r from the axis by k * 0.02 * exp(-(r / R)^2), R half the diagonal.
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "penumbra/core/error.h"
+#include "penumbra/penumbra.h"
+#include "penumbra/render/image.h"
+#include "scene.h"
+
+namespace pb = penumbra::bench;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kStepAngle = 0.02;
+
+// The scene's points after `step` steps of the swirl.
+std::vector<double> swirled(const pb::Scene& scene, int step) {
+  penumbra::Bounds b;
+  for (std::size_t i = 0; i < scene.point_count(); ++i)
+    b.extend({scene.points[3 * i], scene.points[3 * i + 1], scene.points[3 * i + 2]});
+  const penumbra::Vec3d c = 0.5 * (b.lo + b.hi);
+  const double radius = 0.5 * b.diagonal();
+  std::vector<double> out = scene.points;
+  for (std::size_t i = 0; i < scene.point_count(); ++i) {
+    const double x = out[3 * i] - c.x, y = out[3 * i + 1] - c.y;
+    const double a = step * kStepAngle * std::exp(-(x * x + y * y) / (radius * radius));
+    out[3 * i] = c.x + std::cos(a) * x - std::sin(a) * y;
+    out[3 * i + 1] = c.y + std::sin(a) * x + std::cos(a) * y;
+  }
+  return out;
+}
+
+void check(pnb_status s, pnb_context ctx, const char* what) {
+  if (s != PNB_OK)
+    throw penumbra::Error(penumbra::ErrorCode::internal_error,
+                          std::string(what) + ": " + (ctx ? pnb_last_error(ctx) : "pnb_create failed"));
+}
+
+std::string config(const std::string& dir, const std::string& backend, const std::string& lighting, int w, int h) {
+  std::string c = R"({"output": {"directory": ")" + dir + R"("}, "backend": ")" + backend + R"(",
+      "image": {"width": )" + std::to_string(w) + R"(, "height": )" + std::to_string(h) + R"(},
+      "cameras": {"phi": [30], "theta": [25]}, "fields": [{"name": "scalar"}])";
+  if (lighting == "light-volume")
+    c += R"(, "lighting": {"model": "light-volume", "absorption": 1,
+        "lights": [{"type": "directional", "direction": [-1, -0.4, -0.8]}]})";
+  return c + "}";
+}
+
+// One run of the scene: its context and the mesh and field descriptions it publishes.
+struct Run {
+  pnb_context ctx = nullptr;
+  std::string dir;
+  pnb_mesh_desc mesh = PNB_MESH_DESC_INIT;
+  pnb_field_desc field = PNB_FIELD_DESC_INIT;
+  std::vector<double> publish_ms, execute_ms;
+
+  Run(const pb::Scene& scene, const std::vector<double>& values, const std::string& d, const std::string& cfg) : dir(d) {
+    fs::remove_all(dir);
+    check(pnb_create(cfg.c_str(), &ctx), nullptr, "pnb_create");
+    mesh.point_count = static_cast<int64_t>(scene.point_count());
+    mesh.point_type = PNB_FLOAT64;
+    mesh.connectivity = scene.tets.data();
+    mesh.connectivity_count = static_cast<int64_t>(scene.tets.size());
+    mesh.index_type = PNB_INT64;
+    static const std::uint8_t kTetra = 10;
+    mesh.cell_types = &kTetra;
+    mesh.cell_types_count = 1;
+    field.name = "scalar";
+    field.values = values.data();
+    field.count = static_cast<int64_t>(values.size());
+  }
+  ~Run() { pnb_destroy(ctx); }
+  void publish(const std::vector<double>& points, std::uint64_t version) {
+    mesh.points = points.data();
+    mesh.topology_version = version;
+    pb::Stopwatch clock;
+    check(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), ctx, "pnb_publish_mesh");
+    publish_ms.push_back(clock.ms());
+  }
+  void execute(int step) {
+    check(pnb_publish_field(ctx, &field, PNB_BORROW), ctx, "pnb_publish_field");
+    pb::Stopwatch clock;
+    check(pnb_execute(ctx, step, step), ctx, "pnb_execute");
+    execute_ms.push_back(clock.ms());
+  }
+  std::vector<unsigned char> last_image(int step) const {
+    int w = 0, h = 0;
+    char name[64];
+    std::snprintf(name, sizeof name, "scalar/c%06d_phi30_theta25.png", step);
+    return penumbra::render::read_png_rgb(dir + "/" + name, w, h);
+  }
+};
+
+nlohmann::ordered_json measure(const pb::Scene& scene, const std::string& data_dir, const std::string& backend,
+                               const std::string& lighting, int steps, int w, int h) {
+  const std::vector<double> values(scene.scalars.begin(), scene.scalars.end());
+  const std::string base = data_dir + "/moving-" + backend + "-" + lighting;
+  Run moving(scene, values, base + "-update", config(base + "-update", backend, lighting, w, h));
+  Run full(scene, values, base + "-full", config(base + "-full", backend, lighting, w, h));
+  const bool lit = lighting != "none";
+  std::vector<std::vector<double>> points;
+  for (int k = 0; k <= steps; ++k) points.push_back(swirled(scene, k));
+  for (int k = 0; k <= steps; ++k) {
+    // The two runs take turns going first, so that neither always finds the caches warm.
+    Run* order[2] = {&moving, &full};
+    if (k % 2) std::swap(order[0], order[1]);
+    for (Run* r : order) r->publish(points[static_cast<std::size_t>(k)], r == &full ? static_cast<std::uint64_t>(k + 1) : 1);
+    // Unlit, only the last step renders; lit, every step does, so that the light volume moves.
+    if (lit || k == steps)
+      for (Run* r : order) r->execute(k);
+  }
+  // The first publish of each run is a preparation in both; the steps after it are compared.
+  const std::vector<double> update(moving.publish_ms.begin() + 1, moving.publish_ms.end());
+  const std::vector<double> prepare(full.publish_ms.begin() + 1, full.publish_ms.end());
+  const pb::ImageError e = pb::compare_rgb8(moving.last_image(steps), full.last_image(steps));
+  nlohmann::ordered_json line;
+  line["bench"] = "moving";
+  line["scene"] = scene.name;
+  line["backend"] = backend;
+  line["lighting"] = lighting;
+  line["tets"] = scene.tet_count();
+  line["points"] = scene.point_count();
+  line["steps"] = steps;
+  line["geometry_update_ms"] = pb::rounded(pb::median(update), 1);
+  line["full_prepare_ms"] = pb::rounded(pb::median(prepare), 1);
+  line["update_ratio"] = pb::rounded(pb::median(update) / pb::median(prepare), 3);
+  line["rms_pct"] = pb::rounded(e.rms_pct, 4);
+  line["max_level_diff"] = e.max_abs;
+  line["step_ms"] = pb::rounded(pb::median(moving.execute_ms), 1);
+  line["full_step_ms"] = pb::rounded(pb::median(full.execute_ms), 1);
+  line["width"] = w;
+  line["height"] = h;
+  line["load_avg"] = pb::load_average();
+  return line;
+}
+
+int run(int argc, char** argv) {
+  const std::string name = pb::option(argc, argv, "scene", "holeblock-1m");
+  const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const int steps = std::stoi(pb::option(argc, argv, "frames", "5"));
+  const std::string size = pb::option(argc, argv, "size", "256x256");
+  std::istringstream backends(pb::option(argc, argv, "backends", "cpu gpu"));
+  const std::string lightings = pb::option(argc, argv, "lighting", "none light-volume");
+  penumbra::require(!data_dir.empty(), "pnb_bench_moving: --data-dir DIR is required");
+  penumbra::require(steps >= 2, "pnb_bench_moving: --frames must be >= 2");
+  int w = 0, h = 0;
+  penumbra::require(std::sscanf(size.c_str(), "%dx%d", &w, &h) == 2 && w > 0 && h > 0,
+                    "pnb_bench_moving: --size '" + size + "', expected WxH");
+  const pb::Scene scene = pb::load_scene(name, data_dir);
+  for (std::string backend; backends >> backend;) {
+    if (backend == "gpu" && !pb::open_bench_gpu("pnb_bench_moving")) continue;
+    std::istringstream each(lightings);
+    for (std::string lighting; each >> lighting;)
+      std::cout << measure(scene, data_dir, backend, lighting, steps, w, h).dump() << std::endl;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return pb::guarded_main("pnb_bench_moving", run, argc, argv); }
