@@ -3,7 +3,7 @@
 // geometry update (same topology_version) against a full preparation (a new version each step)
 //
 // Usage: pnb_bench_moving --scene NAME --data-dir DIR [--frames N] [--size WxH]
-//        [--backends "cpu gpu"] [--lighting "none light-volume"]
+//        [--backends "cpu gpu"] [--lighting "none light-volume"] [--store-steps N (0: no store line)]
 // Prints one JSON line per backend and lighting, bench "moving":
 //   geometry_update_ms   median pnb_publish_mesh of the moved points under the same version
 //   full_prepare_ms      median pnb_publish_mesh of the same points as a new topology (the path a
@@ -13,6 +13,14 @@
 //                        and the largest channel difference; with the light volume both runs
 //                        solve the light to convergence each step
 //   step_ms, full_step_ms  median pnb_execute of each run (the light volume's solve included)
+// and one line, bench "moving-store", for a Lagrangian series with a store (--store-steps steps,
+// windows of 8, fields within 1e-3 of their range, coordinates at the default bound):
+//   segments             store segments written (1: the topology never changed)
+//   store_ratio          raw bytes (float64 coordinates and field per step) over the bytes the store
+//                        keeps of them (its segment less mesh.pnbm, the connectivity kept once,
+//                        mesh_mb); coordinates_ratio and field_ratio: each part alone
+//   replay_rms_pct       the re-render of two steps from the store against the re-render of the
+//                        exact coordinates and field, RMS in % of 255 (and max_level_diff)
 // The points move by a swirl about the mesh's vertical axis (a vortex in a Lagrangian code): step
 // k rotates a point at distance r from the axis by k * 0.02 * exp(-(r / R)^2), R half the diagonal.
 #include <nlohmann/json.hpp>
@@ -28,6 +36,7 @@
 
 #include "bench_util.h"
 #include "penumbra/core/error.h"
+#include "penumbra/insitu/stored_run.h"
 #include "penumbra/penumbra.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
@@ -160,6 +169,83 @@ nlohmann::ordered_json measure(const pb::Scene& scene, const std::string& data_d
   return line;
 }
 
+std::uint64_t bytes_under(const std::string& dir) {
+  std::uint64_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) n += e.file_size();
+  return n;
+}
+
+// The field of the Lagrangian series at step k: the scene's, warming a little every step.
+std::vector<double> series_field(const pb::Scene& scene, int k) {
+  std::vector<double> v(scene.scalars.begin(), scene.scalars.end());
+  for (double& x : v) x *= 1.0 + 0.02 * k;
+  return v;
+}
+
+nlohmann::ordered_json measure_store(const pb::Scene& scene, const std::string& data_dir, int steps, int w, int h) {
+  const std::string dir = data_dir + "/moving-store", history = dir + "/history";
+  fs::remove_all(dir);
+  const std::string store = R"(, "trigger": {"every_cycles": 1000000000}, "store": {"directory": ")" + history +
+                            R"(", "window": 8, "error_bound": {"relative": 0.001}}})";
+  std::string with_store = config(dir + "/db", "cpu", "none", w, h);
+  with_store.pop_back();
+  pb::Stopwatch clock;
+  {
+    std::vector<double> values = series_field(scene, 0);
+    Run solver(scene, values, dir + "/db", with_store + store);
+    for (int k = 0; k < steps; ++k) {
+      values = series_field(scene, k);
+      solver.field.values = values.data();
+      solver.publish(swirled(scene, k), 1);
+      solver.execute(k);
+    }
+    check(pnb_finalize(solver.ctx), solver.ctx, "pnb_finalize");
+  }
+  const double run_ms = clock.ms();
+  int segments = 0;
+  for (const auto& e : fs::directory_iterator(history)) segments += e.path().filename().string().rfind("segment-", 0) == 0;
+  const double raw = static_cast<double>(steps) * static_cast<double>(scene.point_count()) * 4 * sizeof(double);
+
+  // Two steps re-rendered from the store and from the exact data, with the same config.
+  auto stored = penumbra::insitu::StoredRun::open(history + "/segment-000");
+  pb::ImageError worst;
+  for (const int k : {steps / 2, steps - 1}) {
+    std::vector<double> xyz, values;
+    stored->read_points(static_cast<std::size_t>(k), xyz);
+    stored->read("scalar", static_cast<std::size_t>(k), values);
+    const std::vector<double> exact_values = series_field(scene, k);
+    Run from_store(scene, values, dir + "/from-store", config(dir + "/from-store", "cpu", "none", w, h));
+    Run from_exact(scene, exact_values, dir + "/exact", config(dir + "/exact", "cpu", "none", w, h));
+    from_store.publish(xyz, 1);
+    from_exact.publish(swirled(scene, k), 1);
+    from_store.execute(k);
+    from_exact.execute(k);
+    const pb::ImageError e = pb::compare_rgb8(from_store.last_image(k), from_exact.last_image(k));
+    if (e.rms_pct >= worst.rms_pct) worst = e;
+  }
+  nlohmann::ordered_json line;
+  line["bench"] = "moving-store";
+  line["scene"] = scene.name;
+  line["tets"] = scene.tet_count();
+  line["points"] = scene.point_count();
+  line["steps"] = steps;
+  line["segments"] = segments;
+  const std::string segment = history + "/segment-000";
+  const double coordinates = static_cast<double>(bytes_under(segment + "/coordinates"));
+  const double series = static_cast<double>(bytes_under(segment)) - static_cast<double>(fs::file_size(segment + "/mesh.pnbm"));
+  line["store_ratio"] = pb::rounded(raw / series, 2);
+  line["coordinates_ratio"] = pb::rounded(0.75 * raw / coordinates, 2);
+  line["field_ratio"] = pb::rounded(0.25 * raw / (series - coordinates), 2);
+  line["series_mb"] = pb::rounded(series / (1 << 20), 2);
+  line["mesh_mb"] = pb::rounded(static_cast<double>(fs::file_size(segment + "/mesh.pnbm")) / (1 << 20), 2);
+  line["replay_rms_pct"] = pb::rounded(worst.rms_pct, 4);
+  line["max_level_diff"] = worst.max_abs;
+  line["run_ms_per_step"] = pb::rounded(run_ms / steps, 1);
+  line["load_avg"] = pb::load_average();
+  return line;
+}
+
 int run(int argc, char** argv) {
   const std::string name = pb::option(argc, argv, "scene", "holeblock-1m");
   const std::string data_dir = pb::option(argc, argv, "data-dir", "");
@@ -167,6 +253,7 @@ int run(int argc, char** argv) {
   const std::string size = pb::option(argc, argv, "size", "256x256");
   std::istringstream backends(pb::option(argc, argv, "backends", "cpu gpu"));
   const std::string lightings = pb::option(argc, argv, "lighting", "none light-volume");
+  const int store_steps = std::stoi(pb::option(argc, argv, "store-steps", "16"));
   penumbra::require(!data_dir.empty(), "pnb_bench_moving: --data-dir DIR is required");
   penumbra::require(steps >= 2, "pnb_bench_moving: --frames must be >= 2");
   int w = 0, h = 0;
@@ -179,6 +266,7 @@ int run(int argc, char** argv) {
     for (std::string lighting; each >> lighting;)
       std::cout << measure(scene, data_dir, backend, lighting, steps, w, h).dump() << std::endl;
   }
+  if (store_steps > 0) std::cout << measure_store(scene, data_dir, store_steps, w, h).dump() << std::endl;
   return 0;
 }
 

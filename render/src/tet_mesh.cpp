@@ -57,14 +57,6 @@ std::vector<std::int32_t> weld_points(const std::vector<Vec3d>& points, std::vec
   return canon;
 }
 
-// The canonical point of every point, from the welds recorded at preparation.
-std::vector<std::int32_t> canonical_points(const TetMesh& m) {
-  std::vector<std::int32_t> canon(m.points.size());
-  for (std::size_t i = 0; i < canon.size(); ++i) canon[i] = static_cast<std::int32_t>(i);
-  for (const auto& [point, first] : m.welds) canon[static_cast<std::size_t>(point)] = first;
-  return canon;
-}
-
 void split_cells(const MeshView& view, const std::vector<std::int32_t>& canon, TetMesh& out) {
   const std::size_t nc = view.cell_count();
   std::vector<std::array<std::uint8_t, 4>> local;
@@ -295,7 +287,7 @@ TetMesh move_tet_mesh(const TetMesh& prepared, const MeshView& moved, const char
   m.welded_points = prepared.welded_points;
   m.reoriented_tets = prepared.reoriented_tets;
   m.topology_version = prepared.topology_version;
-  m.surface = make_surface(m, canonical_points(m));
+  m.surface = prepared.surface;  // its topology is the mesh's; rebuilding it would cost a third of the update
   measure_volumes(m);
   return m;
 }

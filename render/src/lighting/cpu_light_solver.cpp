@@ -14,6 +14,12 @@ CpuLightSolver::CpuLightSolver(const TetMesh& mesh, const Level1Topology& topolo
                                const std::vector<float>& scatter_weights)
     : m_points(mesh.points.size()), m_plan(plan_scatter(mesh, topology, scatter_weights)) {}
 
+void CpuLightSolver::move_points(const TetMesh& mesh, const Level1Topology& topology,
+                                 const std::vector<float>& scatter_weights) {
+  m_plan = plan_scatter(mesh, topology, scatter_weights);
+  m_setup_stale = true;
+}
+
 void CpuLightSolver::solve_level0(LightState& l, const Level0Grid& grid, double sigma_a, std::vector<float>& rho0) {
   lighting::solve_level0(grid, l.light, sigma_a, rho0, m_sweep_scratch);
 }

@@ -18,6 +18,7 @@ public:
   /// `scatter_weights`: the mesh's edge weights (scatter_weights()).
   CpuLightSolver(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scatter_weights);
 
+  void move_points(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scatter_weights) override;
   void set_grid(const Level0Grid&) override {}
   void set_field(const Level0Grid&, const Level1Field&) override {}
   void solve_level0(LightState& l, const Level0Grid& grid, double sigma_a, std::vector<float>& rho0) override;

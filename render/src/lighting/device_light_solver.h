@@ -20,6 +20,10 @@ public:
   DeviceLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh& mesh, const Level1Topology& topology,
                     const std::vector<float>& scatter_weights, const std::vector<Bounds>& occluders);
 
+  void move_points(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scatter_weights) override {
+    m_kernels.move_points(mesh, topology, scatter_weights);
+    m_source_stale = true;
+  }
   void set_grid(const Level0Grid& grid) override { m_kernels.set_grid(grid); }
   void set_field(const Level0Grid& grid, const Level1Field& field) override { m_kernels.set_field(grid, field); }
   void solve_level0(LightState& l, const Level0Grid& grid, double sigma_a, std::vector<float>& rho0) override;

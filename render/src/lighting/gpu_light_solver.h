@@ -50,6 +50,9 @@ public:
   GpuLightSolver(const GpuLightSolver&) = delete;
   GpuLightSolver& operator=(const GpuLightSolver&) = delete;
 
+  /// The same mesh with its points moved: uploads the points (in the moved mesh's frame) with
+  /// their longest edges and the scattering weights; the programs and the topology stay.
+  void move_points(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scatter_weights);
   /// A new grid (after construction or a change of resolution): uploads its mask and geometry.
   void set_grid(const Level0Grid& grid);
   /// A new field: the grid's extinction, the scalars per point and the extinction table.

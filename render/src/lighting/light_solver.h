@@ -47,6 +47,9 @@ class LightSolver {
 public:
   virtual ~LightSolver() = default;
 
+  /// The same mesh with its points moved (the volume's copy, in its point order): the solver's
+  /// positions, edge lengths and scattering weights follow; the topology and each light's data stay.
+  virtual void move_points(const TetMesh& mesh, const Level1Topology& topology, const std::vector<float>& scatter_weights) = 0;
   /// A new level-0 grid (at construction, or a resolution reduced for more lights).
   virtual void set_grid(const Level0Grid& grid) = 0;
   /// A resampled field: the grid's extinction and the level-1 field.

@@ -125,16 +125,14 @@ struct LightVolume::Impl {
   }
 
   // The same mesh with its points moved: the point order, the walk records and each light's
-  // solution are kept; the edge lengths, the solver (its copy of the mesh and the scattering
-  // weights) and the level-0 grid follow the points. Every light then starts again from its level-0
+  // solution are kept; the edge lengths, the solver's positions and scattering weights and the
+  // level-0 grid follow the points. Every light then starts again from its level-0
   // solve, as a light that moved does, with its level-1 solution as the warm start
   // (LightState::take_level0); the recorded walks are forgotten and the start tets become hints.
   void move_to(const TetMesh& moved) {
     mesh = std::make_shared<const TetMesh>(detail::with_points_in_order(moved, point_order));
     topology.measure_edges(*mesh);
-    for (auto& l : lights) l.solver_data.reset();  // the old solver's buffers
-    if (first_light_ready) first_light.solver_data.reset();
-    make_solver();
+    solver->move_points(*mesh, topology, lighting::scatter_weights(*mesh, topology));
     build_grid();
   }
 

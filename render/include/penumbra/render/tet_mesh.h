@@ -50,7 +50,8 @@ struct TetMesh {
   double tet_volume = 0, enclosed_volume = 0;
   bool tangled() const;
   std::uint64_t topology_version = 0;
-  std::shared_ptr<const BoundarySurface> surface;  ///< OpenMesh boundary surface (entry/exit, geometry)
+  /// OpenMesh boundary surface (entry/exit, geometry) at preparation; move_tet_mesh shares it.
+  std::shared_ptr<const BoundarySurface> surface;
 
   std::size_t tet_count() const { return tets.size(); }
 };
@@ -71,8 +72,8 @@ bool keeps_welds(const TetMesh& prepared, const MeshView& moved);
 
 /// `prepared` with the point coordinates of `moved`, the same mesh a step later in a Lagrangian
 /// or ALE code: what depends on the connectivity alone (the split into tets, their orientation,
-/// the adjacency, the boundary faces, the welds) is kept; the bounds, the frame, the volumes and
-/// the boundary surface follow the points. Throws penumbra::Error(invalid_argument) for a NaN or
+/// the adjacency, the boundary faces, the welds, the boundary surface, whose OpenMesh points stay
+/// those of the preparation) is kept; the bounds, the frame and the volumes follow the points. Throws penumbra::Error(invalid_argument) for a NaN or
 /// infinite coordinate or an extent beyond validate_mesh's limits, and naming the input cell
 /// when the motion inverted or flattened one of its tets; requires keeps_welds(prepared, moved)
 /// and the same point count. `call` prefixes errors.

@@ -81,6 +81,7 @@ struct GpuLightSolver::Impl {
   Buffer mesh_points, tets, neighbors, incidence, edges, weights;
   // Field and grid.
   Buffer point_scalars, params, grid_tau, grid_mask, counters;
+  std::vector<Bounds> occluders;      // in world units
   std::vector<float> occluder_boxes;  // lo.xyz, hi.xyz per box, in the frame
   int breakpoint_count = 0, occluder_offset = 0;
   std::array<int, 3> dims{0, 0, 0};
@@ -92,6 +93,25 @@ struct GpuLightSolver::Impl {
   std::array<double, 3> omega{1.0, 1.0, 1.0};
 
   GpuDevice::Impl& dev() const { return device->impl(); }
+  /// xyz in the frame and the longest incident edge (in the frame) per point.
+  std::vector<float> point_layout(const Level1Topology& topology) const {
+    std::vector<float> pts(4 * points);
+    for (std::size_t p = 0; p < points; ++p) {
+      const Vec3d r = frame.point(mesh->points[p]);
+      pts[4 * p] = static_cast<float>(r.x);
+      pts[4 * p + 1] = static_cast<float>(r.y);
+      pts[4 * p + 2] = static_cast<float>(r.z);
+      pts[4 * p + 3] = p < topology.longest_edge.size() ? static_cast<float>(frame.length(topology.longest_edge[p])) : 0.0f;
+    }
+    return pts;
+  }
+  void place_occluders() {
+    occluder_boxes.clear();
+    for (const Bounds& b : occluders) {
+      const Vec3d lo = frame.point(b.lo), hi = frame.point(b.hi);
+      for (double v : {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) occluder_boxes.push_back(static_cast<float>(v));
+    }
+  }
 
   void allocate(const GlApi& gl, Buffer& b, std::size_t bytes, const void* data) {
     bytes = std::max<std::size_t>(bytes, 16);  // an empty storage buffer cannot be bound
@@ -192,23 +212,14 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice> device, const TetMesh&
                                                     std::to_string(d.max_compute_storage_blocks) +
                                                     " storage buffers per compute shader; " +
                                                     std::to_string(kLevel1Bindings) + " are needed");
-  for (const Bounds& b : occluders) {
-    const Vec3d lo = m.frame.point(b.lo), hi = m.frame.point(b.hi);
-    for (double v : {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) m.occluder_boxes.push_back(static_cast<float>(v));
-  }
+  m.occluders = occluders;
+  m.place_occluders();
 
-  // Mesh layout: float32 xyz in the frame with the longest incident edge in w; tet
+  // Mesh layout: float32 xyz in the frame with the longest incident edge in w (point_layout); tet
   // vertices and neighbours as ivec4; a point's incident tets (4 tet + local) and edge
   // neighbours behind their offsets (offsets shifted past the offset table itself).
   const std::size_t np = m.points;
-  std::vector<float> pts(4 * np);
-  for (std::size_t p = 0; p < np; ++p) {
-    const Vec3d r = m.frame.point(mesh.points[p]);
-    pts[4 * p] = static_cast<float>(r.x);
-    pts[4 * p + 1] = static_cast<float>(r.y);
-    pts[4 * p + 2] = static_cast<float>(r.z);
-    pts[4 * p + 3] = p < topology.longest_edge.size() ? static_cast<float>(m.frame.length(topology.longest_edge[p])) : 0.0f;
-  }
+  const std::vector<float> pts = m.point_layout(topology);
   // Tets as the CPU walk's records (in its Morton order, neighbours as record << 2 | face), and
   // each point's star as (record << 2 | local index, the opposite face's vertices outward).
   const auto& walk = topology.walk_tets;
@@ -274,6 +285,22 @@ GpuLightSolver::~GpuLightSolver() {
   } catch (...) {
     // The context went with the device; nothing is left to free.
   }
+}
+
+void GpuLightSolver::move_points(const TetMesh& mesh, const Level1Topology& topology,
+                                 const std::vector<float>& scatter_weights) {
+  Impl& m = *m_impl;
+  require(mesh.points.size() == m.points, "GPU light volume: the moved mesh has " + std::to_string(mesh.points.size()) +
+                                              " points; the solver's has " + std::to_string(m.points));
+  m.mesh = &mesh;
+  m.frame = mesh.frame;
+  m.place_occluders();
+  const std::vector<float> pts = m.point_layout(topology);
+  CurrentContext current(m.dev());
+  const GlApi& gl = current.gl();
+  m.upload(gl, m.mesh_points, pts);
+  m.upload(gl, m.weights, scatter_weights);
+  Impl::check_errors(gl, "uploading the moved points");
 }
 
 void GpuLightSolver::set_grid(const Level0Grid& grid) {
