@@ -100,14 +100,18 @@ bool gpu_runs() {
 }
 
 const char* const kPhong = R"(, "lighting": {"model": "phong"})";
+const char* const kOcclusion =
+    R"(, "lighting": {"model": "occlusion", "lights": [{"type": "directional", "direction": [-1, -0.5, -1]}],
+        "occlusion": {"shadows": true}})";
 const char* const kLightVolume =
     R"(, "lighting": {"model": "light-volume", "level0_resolution": 16, "absorption": 2,
         "lights": [{"type": "directional", "direction": [-1, -0.5, -1]}]})";
 
-TEST(MovingMesh, UnlitAndPhongPicturesAreThoseOfTheMeshPreparedAnew) {
+// Occlusion is made again for the moved mesh, so its pictures are those of a new topology too.
+TEST(MovingMesh, UnlitPhongAndOcclusionPicturesAreThoseOfTheMeshPreparedAnew) {
   for (const std::string backend : {"cpu", "gpu"}) {
     if (backend == "gpu" && !gpu_runs()) continue;
-    for (const std::string lighting : {std::string(), std::string(kPhong)}) {
+    for (const std::string lighting : {std::string(), std::string(kPhong), std::string(kOcclusion)}) {
       const auto [moved, fresh] = moved_and_fresh(R"(, "backend": ")" + backend + "\"" + lighting);
       EXPECT_EQ(moved, fresh) << backend << lighting;
     }
