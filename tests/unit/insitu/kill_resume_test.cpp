@@ -48,6 +48,18 @@ std::size_t listed_rows(const std::string& dir) {
   return table.empty() ? 0 : table.size() - 1;  // empty: not created yet
 }
 
+// Starts a solver with a store (moving points or not), SIGKILLs it once `steps` steps are listed
+// (6 images each; at most a minute) and returns whether the kill ended it.
+bool kill_after_steps(const std::string& dir, const std::string& store, bool moving, std::size_t steps) {
+  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store, moving);
+  if (pid <= 0) return false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (listed_rows(dir) < 6 * steps && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  kill(pid, SIGKILL);
+  return WIFSIGNALED(wait_exit(pid));
+}
+
 TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
   TempDir tmp;
   // Kill at several points of a step: right after a commit is seen and some time into the next.
@@ -80,14 +92,8 @@ TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
 TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
   TempDir tmp;
   const std::string dir = tmp / "db", store = tmp / "store";
-  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store);
-  ASSERT_GT(pid, 0);
   // 20 rendered steps (6 images each): two windows of 8 are finished or being written.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (listed_rows(dir) < 6 * 20 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  kill(pid, SIGKILL);
-  ASSERT_TRUE(WIFSIGNALED(wait_exit(pid))) << "the solver ended before it was killed";
+  ASSERT_TRUE(kill_after_steps(dir, store, false, 20)) << "the solver ended before it was killed";
   const std::size_t rendered = listed_rows(dir) / 6;
   auto run = StoredRun::open(store + "/segment-000");
   EXPECT_EQ(run->fields(), (std::vector<std::string>{"T", "T2"}));
@@ -108,13 +114,7 @@ TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
 TEST(KillSafety, StoreOfAKilledMovingSolverReopens) {
   TempDir tmp;
   const std::string dir = tmp / "db", store = tmp / "store";
-  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store, true);
-  ASSERT_GT(pid, 0);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (listed_rows(dir) < 6 * 20 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  kill(pid, SIGKILL);
-  ASSERT_TRUE(WIFSIGNALED(wait_exit(pid))) << "the solver ended before it was killed";
+  ASSERT_TRUE(kill_after_steps(dir, store, true, 20)) << "the solver ended before it was killed";
   EXPECT_FALSE(std::filesystem::exists(store + "/segment-001"));
   auto run = StoredRun::open(store + "/segment-000");
   ASSERT_TRUE(run->points_move());

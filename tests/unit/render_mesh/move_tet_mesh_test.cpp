@@ -175,16 +175,7 @@ TEST(MoveTetMesh, NonFiniteOrOutOfRangePointsAreNamed) {
 }
 
 TEST(MoveTetMesh, WeldsHoldWhileDuplicatedPointsMoveTogether) {
-  // Two hex blocks, each with its own copy of the shared x = 1 plane of points.
-  auto mesh = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
-  const auto right = fixtures::block(BlockCells::hexes, 2, 2, 2, {1, 0, 0}, {2, 1, 1});
-  const auto base = static_cast<std::int64_t>(mesh.point_count());
-  mesh.xyz.insert(mesh.xyz.end(), right.xyz.begin(), right.xyz.end());
-  for (std::size_t c = 0; c < right.cell_count(); ++c) {
-    std::int64_t ids[8];
-    for (int k = 0; k < 8; ++k) ids[k] = right.connectivity[8 * c + static_cast<std::size_t>(k)] + base;
-    mesh.add_cell(12, {ids[0], ids[1], ids[2], ids[3], ids[4], ids[5], ids[6], ids[7]});
-  }
+  const auto mesh = fixtures::two_blocks_with_duplicated_interface();
   const auto prepared = render::prepare_tet_mesh(mesh.view());
   ASSERT_EQ(prepared.welds.size(), 9u);
   auto together = mesh;

@@ -98,16 +98,8 @@ TEST(TetMesh, AFoldedMeshIsTangledAndABlockIsNot) {
 }
 
 TEST(TetMesh, DuplicatedInterfacePointsAreWelded) {
-  // Two hex blocks side by side, each with its own copy of the shared x = 1 plane of points.
-  auto left = fixtures::block(BlockCells::hexes, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
-  const auto right = fixtures::block(BlockCells::hexes, 2, 2, 2, {1, 0, 0}, {2, 1, 1});
-  const auto base = static_cast<std::int64_t>(left.point_count());
-  left.xyz.insert(left.xyz.end(), right.xyz.begin(), right.xyz.end());
-  for (std::size_t c = 0; c < right.cell_count(); ++c) {
-    std::vector<std::int64_t> ids(right.connectivity.begin() + 8 * c, right.connectivity.begin() + 8 * c + 8);
-    left.add_cell(12, {ids[0] + base, ids[1] + base, ids[2] + base, ids[3] + base, ids[4] + base, ids[5] + base,
-                       ids[6] + base, ids[7] + base});
-  }
+  const auto left = fixtures::two_blocks_with_duplicated_interface();
+  const auto base = static_cast<std::int64_t>(left.point_count() / 2);  // the second block's first point
   const auto m = render::prepare_tet_mesh(left.view());
   EXPECT_EQ(m.welded_points, 9u);  // the 3x3 points of the shared plane
   // Welded, the two blocks form one 2x1x1 box: no false boundary at x = 1.
