@@ -7,6 +7,7 @@
 #include <string>
 
 #include "config.h"
+#include "c_api_internal.h"
 #include "context.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
@@ -167,17 +168,33 @@ penumbra::FieldView field_view(const pnb_field_desc& d) {
 
 }  // namespace
 
+namespace penumbra::insitu {
+
+pnb_status create_context(const char* call, const char* config, std::shared_ptr<RankGroup> group, pnb_context* out) {
+  if (out) *out = nullptr;
+  std::unique_ptr<pnb_context_s> ctx;
+  // Created on every rank, then agreed: a rank that failed (rank 0 alone opens the database)
+  // makes every rank's creation fail, naming it.
+  const pnb_status status = guarded(nullptr, [&] {
+    require(out != nullptr, std::string(call) + ": out is NULL");
+    require(config != nullptr, std::string(call) + ": config is NULL (expected a file path or JSON text)");
+    ctx = std::make_unique<pnb_context_s>();
+    ctx->context = std::make_unique<Context>(parse_config(config), group);
+  });
+  if (group->size() > 1) {
+    const auto failed = group->failures(status == PNB_OK ? 0 : static_cast<int>(status), t_last_error);
+    if (!failed.empty()) return record(nullptr, static_cast<pnb_status>(failed.front().code), ranks_text(failed, group->size()).c_str());
+  }
+  if (status == PNB_OK) *out = ctx.release();
+  return status;
+}
+
+}  // namespace penumbra::insitu
+
 extern "C" {
 
 pnb_status pnb_create(const char* config, pnb_context* out) {
-  if (out) *out = nullptr;
-  return guarded(nullptr, [&] {
-    penumbra::require(out != nullptr, "pnb_create: out is NULL");
-    penumbra::require(config != nullptr, "pnb_create: config is NULL (expected a file path or JSON text)");
-    auto ctx = std::make_unique<pnb_context_s>();
-    ctx->context = std::make_unique<penumbra::insitu::Context>(penumbra::insitu::parse_config(config));
-    *out = ctx.release();
-  });
+  return penumbra::insitu::create_context("pnb_create", config, penumbra::insitu::serial_group(), out);
 }
 
 pnb_status pnb_check_config(const char* config) {

@@ -79,16 +79,24 @@ std::vector<std::string> field_labels(const Config& c) {
   return labels;
 }
 
-/// The data range that field `f` maps to [0, 1] this step: the config's range, else the values'
-/// finite range. A constant (or all-NaN) field has lo == hi: the range is widened around the value
-/// so that it sits inside instead of dividing by zero (any half-width works; this one is at least
-/// the value's own size, and an end beyond the largest double is held at it).
-std::pair<double, double> normalization_range(const FieldConfig& f, const std::vector<double>& values) {
+/// The data range of field `f` on this rank's values, before the ranks agree on it: the config's
+/// range, else the values' finite range (empty, lo > hi, when none is finite).
+std::pair<double, double> local_range(const FieldConfig& f, const std::vector<double>& values) {
   if (f.range) return *f.range;
   const ValueRange r = finite_range(values);
-  if (r.hi > r.lo) return {r.lo, r.hi};
-  const double h = 0.5 * std::max(1.0, std::fabs(r.lo)), largest = std::numeric_limits<double>::max();
-  return {std::max(r.lo - h, -largest), std::min(r.lo + h, largest)};
+  if (r.finite_count == 0) return {HUGE_VAL, -HUGE_VAL};
+  return {r.lo, r.hi};
+}
+
+/// The data range a field maps to [0, 1]: `lo`..`hi`, or where they are equal (a constant field)
+/// or empty (no finite value), a range widened around the value so that it sits inside instead
+/// of dividing by zero (any half-width works; this one is at least the value's own size, and an
+/// end beyond the largest double is held at it).
+std::pair<double, double> usable_range(double lo, double hi) {
+  if (hi > lo) return {lo, hi};
+  if (lo > hi) lo = 0;  // no finite value anywhere
+  const double h = 0.5 * std::max(1.0, std::fabs(lo)), largest = std::numeric_limits<double>::max();
+  return {std::max(lo - h, -largest), std::min(lo + h, largest)};
 }
 
 /// Transfer function of `f` over the step's normalised values (x in [0, 1] over [lo, hi]) with
@@ -155,7 +163,30 @@ Backend resolve_backend(Backend requested) {
   }
 }
 
+// What a run over several ranks does not do yet: refused at creation, naming the key.
+void check_rank_rules(const Config& c) {
+  auto refuse = [](const std::string& what) {
+    throw Error(ErrorCode::invalid_argument, "config: " + what + " is not available in a run over several ranks yet");
+  };
+  if (c.store) refuse("\"store\"");
+  if (c.lighting && (c.lighting->occlusion_model || c.lighting->model == render::LightingModel::light_volume))
+    refuse("lighting model \"" + lighting_label(*c.lighting) + "\"");
+}
+
 }  // namespace
+
+std::string ranks_text(const std::vector<RankGroup::Failure>& failed, int ranks) {
+  std::vector<std::pair<std::string, std::string>> messages;  // message, its ranks
+  for (const RankGroup::Failure& f : failed) {
+    auto it = std::find_if(messages.begin(), messages.end(), [&](const auto& m) { return m.first == f.message; });
+    if (it == messages.end()) it = messages.insert(messages.end(), {f.message, "rank"});
+    it->second += (it->second == "rank" ? " " : ", ") + std::to_string(f.rank);
+  }
+  if (messages.size() == 1 && static_cast<int>(failed.size()) == ranks) return messages.front().first;
+  std::string text;
+  for (const auto& [message, who] : messages) text += (text.empty() ? "" : "; ") + who + ": " + message;
+  return text;
+}
 
 std::string format_number(double v) {
   char buf[64];
@@ -170,6 +201,7 @@ struct Context::PreparedMesh {
   std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
   std::vector<std::uint8_t> cell_types;
   MeshView view;  ///< over the owned copies (points from the prepared mesh)
+  Bounds global_bounds;  ///< of every rank's mesh: the cameras and the frame are the ranks' common ones
   std::vector<ViewCamera> cameras;
   /// Per config field entry, its light volume (model light-volume), made at the first step and
   /// kept across steps so that each step's light starts from the previous one.
@@ -178,17 +210,19 @@ struct Context::PreparedMesh {
   std::vector<std::unique_ptr<render::OcclusionLighting>> occlusions;
 };
 
-Context::Context(Config config)
-    : m_config(std::move(config)), m_trigger(m_config.trigger), m_field_labels(field_labels(m_config)) {
+Context::Context(Config config, std::shared_ptr<RankGroup> group)
+    : m_config(std::move(config)), m_group(std::move(group)), m_trigger(m_config.trigger),
+      m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   m_cpu_fallback = m_config.backend == Backend::automatic;
   check_config_rules(m_config);
+  if (m_group->size() > 1) check_rank_rules(m_config);
   // Image-space occlusion is evaluated along every ray, by the CPU ray caster.
   if (m_config.lighting && m_config.lighting->occlusion_model &&
       m_config.lighting->occlusion.space == OcclusionSpace::image)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
-  m_writer = std::make_unique<ImageWriter>(m_config);
+  if (m_group->rank() == 0) m_writer = std::make_unique<ImageWriter>(m_config);
   if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store);
 }
 
@@ -207,24 +241,58 @@ std::size_t Context::held_field_bytes() const {
 
 void Context::publish_mesh(const MeshView& mesh) {
   require_open("pnb_publish_mesh");
-  if (m_mesh && m_mesh->view.topology_version == mesh.topology_version) {
-    // Same topology. Counts are compared because they cost nothing and catch a solver that
-    // changed its mesh but forgot to bump the version.
-    require(mesh.point_count() == m_mesh->view.point_count() && mesh.cell_count() == m_mesh->view.cell_count(),
-            "pnb_publish_mesh: topology_version " + std::to_string(mesh.topology_version) +
-                " is unchanged but the mesh now has " + std::to_string(mesh.point_count()) + " points and " +
-                std::to_string(mesh.cell_count()) + " cells (was " + std::to_string(m_mesh->view.point_count()) +
-                " and " + std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the connectivity changes");
-    if (points_moved(mesh)) move_points(mesh);
-    return;
-  }
-  prepare_mesh(mesh);
+  MeshUpdate update;
+  agreed("pnb_publish_mesh", [&] { update = plan_mesh_update(mesh); });
+  // Every rank takes part below when any rank's mesh changed: the ranks share one frame and one
+  // set of cameras, both from the union of their bounds.
+  double unchanged = update.kind == MeshUpdate::Kind::same ? 1 : 0;
+  m_group->minimum(&unchanged, 1);
+  if (unchanged == 1) return;
+  if (!update.tets) update.tets = *m_mesh->tets;  // this rank's points stayed; the shared frame may not
+  const Bounds global = global_bounds(*m_group, update.tets->bounds);
+  update.tets->frame = LocalFrame::of(global);
+  agreed("pnb_publish_mesh", [&] { apply_mesh_update(mesh, std::move(update), global); });
 }
 
-void Context::prepare_mesh(const MeshView& mesh) {
+Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {
+  using Kind = MeshUpdate::Kind;
+  if (!m_mesh || m_mesh->view.topology_version != mesh.topology_version)
+    return {Kind::fresh, render::prepare_tet_mesh(mesh, "pnb_publish_mesh")};
+  // Same topology. Counts are compared because they cost nothing and catch a solver that changed
+  // its mesh but forgot to bump the version.
+  require(mesh.point_count() == m_mesh->view.point_count() && mesh.cell_count() == m_mesh->view.cell_count(),
+          "pnb_publish_mesh: topology_version " + std::to_string(mesh.topology_version) +
+              " is unchanged but the mesh now has " + std::to_string(mesh.point_count()) + " points and " +
+              std::to_string(mesh.cell_count()) + " cells (was " + std::to_string(m_mesh->view.point_count()) + " and " +
+              std::to_string(m_mesh->view.cell_count()) + "); bump topology_version when the connectivity changes");
+  if (!points_moved(mesh)) return {Kind::same, std::nullopt};
+  if (!render::keeps_welds(*m_mesh->tets, mesh)) {
+    log_line("pnb_publish_mesh: points that coincided when the mesh was prepared moved apart, which changes its "
+             "adjacency: the mesh is prepared anew");
+    return {Kind::fresh, render::prepare_tet_mesh(mesh, "pnb_publish_mesh")};
+  }
+  return {Kind::moved, render::move_tet_mesh(*m_mesh->tets, mesh, "pnb_publish_mesh")};
+}
+
+void Context::apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global) {
+  auto tets = std::make_shared<const render::TetMesh>(std::move(*update.tets));
+  if (update.kind != MeshUpdate::Kind::same) log_if_tangled(*tets);
+  if (update.kind == MeshUpdate::Kind::fresh) {
+    prepare_mesh(mesh, std::move(tets));
+  } else {
+    move_geometry(std::move(tets));
+    if (update.kind == MeshUpdate::Kind::moved) {
+      ++m_geometry_updates;
+      if (m_store) m_store->points_moved();
+    }
+  }
+  m_mesh->global_bounds = global;
+  m_mesh->cameras = view_cameras(m_config, global);
+}
+
+void Context::prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::TetMesh> tets) {
   auto p = std::make_unique<PreparedMesh>();
-  p->tets = std::make_shared<const render::TetMesh>(render::prepare_tet_mesh(mesh, "pnb_publish_mesh"));
-  log_if_tangled(*p->tets);
+  p->tets = std::move(tets);
   p->renderer = make_renderer(p->tets);
   p->on_gpu = std::string(p->renderer->backend()) == "gpu";
 
@@ -243,11 +311,21 @@ void Context::prepare_mesh(const MeshView& mesh) {
   p->view.offsets.data = p->offsets.empty() ? nullptr : p->offsets.data();
   p->view.cell_types = p->cell_types.data();
   m_mesh = std::move(p);
-  place_views();
+  point_view_at_tets();
   ++m_preparations;
   if (m_store) m_store->begin_segment(m_mesh->view);
   // Fields were sized for the old mesh.
   m_fields.clear();
+}
+
+void Context::move_geometry(std::shared_ptr<const render::TetMesh> tets) {
+  PreparedMesh& p = *m_mesh;
+  p.renderer->move_points(tets);
+  for (auto& lv : p.light_volumes)
+    if (lv) lv->move_points(tets);
+  p.occlusions.clear();  // made again for the moved mesh at the next step
+  p.tets = std::move(tets);
+  point_view_at_tets();
 }
 
 void Context::log_if_tangled(const render::TetMesh& tets) const {
@@ -260,10 +338,9 @@ void Context::log_if_tangled(const render::TetMesh& tets) const {
   log_line(text);
 }
 
-void Context::place_views() {
+void Context::point_view_at_tets() {
   PreparedMesh& p = *m_mesh;
   p.view.points = {reinterpret_cast<const std::byte*>(p.tets->points.data()), p.tets->points.size(), sizeof(Vec3d)};
-  p.cameras = view_cameras(m_config, p.tets->bounds);
 }
 
 bool Context::points_moved(const MeshView& mesh) const {
@@ -273,25 +350,6 @@ bool Context::points_moved(const MeshView& mesh) const {
   for (std::size_t i = 0; i < mesh.point_count(); ++i)
     if (!(mesh.point(i) == held[i])) return true;
   return false;
-}
-
-void Context::move_points(const MeshView& mesh) {
-  PreparedMesh& p = *m_mesh;
-  if (!render::keeps_welds(*p.tets, mesh)) {
-    log_line("pnb_publish_mesh: points that coincided when the mesh was prepared moved apart, which changes its "
-             "adjacency: the mesh is prepared anew");
-    return prepare_mesh(mesh);
-  }
-  auto moved = std::make_shared<const render::TetMesh>(render::move_tet_mesh(*p.tets, mesh, "pnb_publish_mesh"));
-  log_if_tangled(*moved);
-  p.renderer->move_points(moved);
-  for (auto& lv : p.light_volumes)
-    if (lv) lv->move_points(moved);
-  p.occlusions.clear();  // made again for the moved mesh at the next step
-  p.tets = std::move(moved);
-  place_views();
-  ++m_geometry_updates;
-  if (m_store) m_store->points_moved();
 }
 
 void Context::publish_field(const FieldView& field, bool copy) {
@@ -340,7 +398,7 @@ void Context::StepFailures::rethrow() const {
   if (code != ErrorCode::ok) throw Error(code, text);
 }
 
-const Context::StepField& Context::field_values(std::size_t index, std::int64_t cycle, StepValues& values) const {
+Context::StepField& Context::gather_field(std::size_t index, std::int64_t cycle, StepValues& values) const {
   auto& v = values[index];
   if (v) return *v;
   const FieldConfig& f = m_config.fields[index];
@@ -351,9 +409,16 @@ const Context::StepField& Context::field_values(std::size_t index, std::int64_t 
   // A held view stays valid: borrowed views are dropped after every execute, copied ones own their data.
   StepField& step = v.emplace();
   step.values = point_values(m_mesh->view, it->second.view, f.mode, f.component);
-  std::tie(step.lo, step.hi) = normalization_range(f, step.values);
-  step.normalized = normalize_values(step.values, step.lo, step.hi);
+  std::tie(step.lo, step.hi) = local_range(f, step.values);
   return step;
+}
+
+void Context::normalize_field(std::size_t index, StepField& step) const {
+  if (!step.normalized.empty()) return;
+  // The ranks' values share one range, so that a value has one colour on every rank.
+  if (!m_config.fields[index].range) global_range(*m_group, step.lo, step.hi);
+  std::tie(step.lo, step.hi) = usable_range(step.lo, step.hi);
+  step.normalized = normalize_values(step.values, step.lo, step.hi);
 }
 
 std::unique_ptr<render::Renderer> Context::make_renderer(const std::shared_ptr<const render::TetMesh>& tets) const {
@@ -436,6 +501,7 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
     view.field = index;
     view.camera = c;
     const auto t0 = Clock::now();
+    options.ray_runs = m_group->size() > 1;  // the ranks' runs are merged by composite()
     m_mesh->renderer->render(step.normalized, tf, camera, options, view.output);
     render_ms += ms_since(t0);
   }
@@ -459,20 +525,47 @@ ImageLabels Context::labels_of(const ComposedImage& image, double time, std::int
 
 void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                            std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
-  const StepField& step = field_values(index, cycle, values);  // gather
+  StepField* step = nullptr;
+  agreed("pnb_execute", [&] { step = &gather_field(index, cycle, values); });  // gather
+  normalize_field(index, *step);
   const FieldConfig& f = m_config.fields[index];
-  const render::TransferFunction tf = resolve_transfer_function(f, step.lo, step.hi, m_mesh->tets->bounds.diagonal());
-  const render::RenderOptions options = prepare_lighting(index, step, tf);
-  for (RenderedView& view : render_views(index, step, tf, options, render_ms)) {
-    const ComposedImage image = composite_view(std::move(view), m_config.background);
-    rows.push_back(m_writer->write(image, labels_of(image, time, cycle)));
+  const render::TransferFunction tf = resolve_transfer_function(f, step->lo, step->hi, m_mesh->global_bounds.diagonal());
+  std::vector<RenderedView> views;
+  agreed("pnb_execute", [&] { views = render_views(index, *step, tf, prepare_lighting(index, *step, tf), render_ms); });
+  for (RenderedView& view : views) {
+    const std::optional<ComposedImage> image = composite(std::move(view));
+    if (image && m_writer) rows.push_back(m_writer->write(*image, labels_of(*image, time, cycle)));
   }
+}
+
+std::optional<ComposedImage> Context::composite(RenderedView&& view) {
+  if (m_group->size() == 1) return composite_view(std::move(view), m_config.background);
+  // Every rank's runs of the view merged in depth order; the whole image on rank 0.
+  RenderedView merged;
+  merged.field = view.field;
+  merged.camera = view.camera;
+  merged.output.image = m_group->composite(view.output.runs, view.output.image.width, view.output.image.height);
+  if (m_group->rank() != 0) return std::nullopt;
+  return composite_view(std::move(merged), m_config.background);
+}
+
+bool Context::trigger_fires(double time, std::int64_t cycle) {
+  const bool fires = m_trigger.fires(time, cycle);
+  // min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not.
+  double v[2] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0};
+  m_group->minimum(v, 2);
+  if (m_group->size() > 1 && v[0] == 0 && v[1] == 0)
+    throw Error(ErrorCode::invalid_operation, "pnb_execute: the ranks disagree whether cycle " + std::to_string(cycle) +
+                                                  " renders: every rank must pass the same time and cycle");
+  return fires;
 }
 
 bool Context::execute(double time, std::int64_t cycle) {
   require_open("pnb_execute");
-  if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
-  require(std::isfinite(time), "pnb_execute: time must be finite");
+  agreed("pnb_execute", [&] {
+    if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
+    require(std::isfinite(time), "pnb_execute: time must be finite");
+  });
   struct DropBorrowed {
     Context* c;
     ~DropBorrowed() { c->drop_borrowed_fields(); }
@@ -481,8 +574,8 @@ bool Context::execute(double time, std::int64_t cycle) {
   StepValues values(m_config.fields.size());
   // The history is kept on its own cadence, whether or not this step renders.
   if (m_store && m_store->records(cycle)) store_fields(time, cycle, values, failures);
-  if (!m_trigger.fires(time, cycle)) {
-    failures.rethrow();
+  if (!trigger_fires(time, cycle)) {
+    report(failures);
     return false;
   }
 
@@ -500,13 +593,27 @@ bool Context::execute(double time, std::int64_t cycle) {
     }
   }
   // Only images that were completely written are listed.
-  m_writer->commit(rows);
+  if (m_writer) {
+    try {
+      m_writer->commit(rows);
+    } catch (const Error& e) {
+      failures.add(e);
+    }
+  }
   m_last_step.cycle = cycle;
   m_last_step.images = static_cast<int>(rows.size());
   m_last_step.render_ms = render_ms;
   m_last_step.total_ms = ms_since(t0);
-  failures.rethrow();
+  report(failures);
   return true;
+}
+
+void Context::report(const StepFailures& failures) {
+  if (m_group->size() == 1) return failures.rethrow();
+  // A failure on one rank alone (a write on rank 0) is every rank's status.
+  const auto failed = m_group->failures(static_cast<int>(failures.code), failures.text);
+  if (failed.empty()) return;
+  throw Error(static_cast<ErrorCode>(failed.front().code), ranks_text(failed, m_group->size()));
 }
 
 void Context::store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures) {
@@ -520,7 +627,7 @@ void Context::store_fields(double time, std::int64_t cycle, StepValues& values, 
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     if (m_fields.find(m_config.fields[i].name) == m_fields.end()) continue;  // reported when the step renders
     try {
-      m_store->record(m_field_labels[i], time, cycle, field_values(i, cycle, values).values);
+      m_store->record(m_field_labels[i], time, cycle, gather_field(i, cycle, values).values);
     } catch (const Error& e) {
       failures.add(e);
     }

@@ -2,6 +2,7 @@
 // insitu/src/context.h -- the in-situ runtime behind the C API
 #pragma once
 #include <cstdint>
+#include <exception>
 #include <map>
 #include <memory>
 #include <optional>
@@ -17,6 +18,8 @@
 #include "penumbra/render/light_volume.h"
 #include "penumbra/render/occlusion.h"
 #include "penumbra/render/renderer.h"
+#include "penumbra/render/tet_mesh.h"
+#include "rank_group.h"
 #include "step_stages.h"
 #include "trigger.h"
 
@@ -41,8 +44,11 @@ struct StepStats {
 /// penumbra::Error on bad input or failed I/O; the C API turns that into a status.
 class Context {
 public:
-  /// Opens the output database (see CinemaDatabase) and checks the backend.
-  explicit Context(Config config);
+  /// Opens the output database (see CinemaDatabase; on rank 0 of `group` only) and checks the
+  /// backend. With a group of several ranks (an MPI run), publish_mesh, execute and finalize are
+  /// collective: every rank calls them, in the same order; a failure on any rank is every rank's
+  /// Error, naming the rank, and no rank is left waiting.
+  explicit Context(Config config, std::shared_ptr<RankGroup> group = serial_group());
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -51,7 +57,8 @@ public:
   /// an owned copy of its topology for cell-to-point averaging; `mesh` may be freed afterwards.
   /// Under the topology_version already prepared, the point and cell counts must be the same and
   /// the points are compared with the prepared ones (one pass): unchanged, nothing is redone;
-  /// moved, only what depends on the positions is (move_points).
+  /// moved, only what depends on the positions is (move_tet_mesh, Renderer::move_points). The
+  /// cameras and the float32 frame come from the union of the ranks' bounds.
   void publish_mesh(const MeshView& mesh);
 
   /// Hands in a field for the next execute(). Fields the config does not render are ignored:
@@ -106,21 +113,42 @@ private:
   using StepValues = std::vector<std::optional<StepField>>;
 
   void require_open(const char* call) const;
-  /// A new topology: the mesh split, its adjacency, the renderer, cameras; a new store segment.
-  void prepare_mesh(const MeshView& mesh);
-  /// The same topology with its points moved: the connectivity's work is kept (move_tet_mesh),
-  /// the renderer and light volumes move their geometry, occlusion is made again, the cameras
-  /// follow the bounds and the store records the coordinates. A mesh whose welded points moved
-  /// apart is prepared anew.
-  void move_points(const MeshView& mesh);
+  /// Runs `phase` (this rank's own work, no collective inside), then agrees with the other ranks:
+  /// when any rank's phase threw, every rank throws one Error naming each failing rank and its
+  /// message. A serial run rethrows its own exception as it is.
+  template <class Phase>
+  void agreed(const char* call, Phase&& phase);
+  /// This rank's part of a publish: what changed, and the tet mesh for it in its own frame.
+  struct MeshUpdate {
+    enum class Kind { same, moved, fresh } kind = Kind::same;
+    std::optional<render::TetMesh> tets;
+  };
+  MeshUpdate plan_mesh_update(const MeshView& mesh) const;
+  /// Takes `update` (its frame set from the ranks' `global` bounds): a new preparation, or the
+  /// geometry moved; the cameras from `global`.
+  void apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global);
+  /// A new topology: the renderer, the owned connectivity; a new store segment; fields dropped.
+  void prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::TetMesh> tets);
+  /// The same topology at other positions (or in another frame): the renderer and the light
+  /// volumes move their geometry, occlusion is made again.
+  void move_geometry(std::shared_ptr<const render::TetMesh> tets);
   /// Whether any point of `mesh` differs from the prepared mesh's.
   bool points_moved(const MeshView& mesh) const;
-  /// The prepared view's points and the cameras, from the prepared mesh.
-  void place_views();
+  /// The prepared view's points, at the prepared tet mesh's.
+  void point_view_at_tets();
   void log_if_tangled(const render::TetMesh& tets) const;
-  /// Point values of config field `index` this step; throws Error(invalid_operation) when the
-  /// field was not published.
-  const StepField& field_values(std::size_t index, std::int64_t cycle, StepValues& values) const;
+  /// Whether the step renders, the same on every rank (Error when the ranks disagree).
+  bool trigger_fires(double time, std::int64_t cycle);
+  /// The step's failures: thrown, on every rank when any rank had one.
+  void report(const StepFailures& failures);
+  /// The composite stage: a view's image over the background; with several ranks their runs
+  /// merged first. Empty on ranks other than 0 (rank 0 writes the database).
+  std::optional<ComposedImage> composite(RenderedView&& view);
+  /// Point values of config field `index` this step, and this rank's range of them; throws
+  /// Error(invalid_operation) when the field was not published.
+  StepField& gather_field(std::size_t index, std::int64_t cycle, StepValues& values) const;
+  /// The ranks' common range of the field (collective), and its values mapped by it.
+  void normalize_field(std::size_t index, StepField& step) const;
   /// The renderer of a newly published mesh: the config's backend (the CPU where "auto" finds
   /// that the GPU cannot hold the mesh).
   std::unique_ptr<render::Renderer> make_renderer(const std::shared_ptr<const render::TetMesh>& tets) const;
@@ -142,8 +170,9 @@ private:
   void store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures);
 
   Config m_config;
+  std::shared_ptr<RankGroup> m_group;
   Trigger m_trigger;
-  std::unique_ptr<ImageWriter> m_writer;  ///< the write stage; opened with the context
+  std::unique_ptr<ImageWriter> m_writer;  ///< the write stage; opened with the context, on rank 0 only
   std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
   bool m_cpu_fallback = false;           ///< "auto": a mesh the GPU cannot hold renders on the CPU
   std::unique_ptr<PreparedMesh> m_mesh;
@@ -157,5 +186,34 @@ private:
 
 /// Formats a number for data.csv: shortest text that reads back to the same double.
 std::string format_number(double v);
+
+/// Several ranks' failures as one message: each distinct message once, after the ranks that had
+/// it; a message every rank had, alone.
+std::string ranks_text(const std::vector<RankGroup::Failure>& failed, int ranks);
+
+template <class Phase>
+void Context::agreed(const char* call, Phase&& phase) {
+  int code = 0;
+  std::string message;
+  std::exception_ptr mine;
+  try {
+    phase();
+  } catch (const Error& e) {
+    code = static_cast<int>(e.code());
+    message = e.what();
+    mine = std::current_exception();
+  } catch (const std::exception& e) {
+    code = static_cast<int>(ErrorCode::internal_error);
+    message = std::string(call) + ": " + e.what();
+    mine = std::current_exception();
+  }
+  if (m_group->size() == 1) {
+    if (mine) std::rethrow_exception(mine);
+    return;
+  }
+  const auto failed = m_group->failures(code, message);
+  if (failed.empty()) return;
+  throw Error(static_cast<ErrorCode>(code != 0 ? code : failed.front().code), ranks_text(failed, m_group->size()));
+}
 
 }  // namespace penumbra::insitu

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// insitu/src/rank_group.h -- the processes one run spans: one (serial) or an MPI communicator's
+#pragma once
+#include <memory>
+#include <string>
+
+#include "penumbra/core/vec3.h"
+#include "penumbra/render/image.h"
+#include "penumbra/render/renderer.h"
+
+namespace penumbra::insitu {
+
+/// What a Context asks of the ranks it runs on. A serial run is one rank (serial_group()); an MPI
+/// run's group lives in the MPI library (insitu/mpi), so that this library never links MPI. Every
+/// call but rank() and size() is collective: all ranks make it, in the same order.
+class RankGroup {
+public:
+  virtual ~RankGroup() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  /// Each rank's failure of a phase ("" when it succeeded), agreed: every rank gets, for each
+  /// rank that failed, its number, error code and message (ranks in order); empty when none did.
+  struct Failure {
+    int rank = 0;
+    int code = 0;
+    std::string message;
+  };
+  virtual std::vector<Failure> failures(int code, const std::string& message) = 0;
+  /// Element-wise minimum of `values` over the ranks, in place.
+  virtual void minimum(double* values, int count) = 0;
+  /// The ranks' runs of one view merged: every pixel's runs in depth order, composited front to
+  /// back ("over"). Returns the whole image on rank 0 and an empty one elsewhere.
+  virtual render::Image composite(const render::RayRuns& runs, int width, int height) = 0;
+};
+
+/// The one rank of a process that renders alone.
+std::shared_ptr<RankGroup> serial_group();
+
+/// The union of every rank's bounds (collective).
+Bounds global_bounds(RankGroup& group, const Bounds& mine);
+
+/// The smallest `lo` and largest `hi` over the ranks (collective).
+void global_range(RankGroup& group, double& lo, double& hi);
+
+}  // namespace penumbra::insitu
