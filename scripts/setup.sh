@@ -12,6 +12,7 @@ packages=(
   libpng-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libzfp-dev libzstd-dev libfpzip-dev
+  libopenmpi-dev openmpi-bin  # penumbra_mpi and its tests under mpirun
   gmsh  # benchmark meshes (bench/run.sh)
 )
 source "$(dirname "$0")/apt_install.sh"

@@ -189,6 +189,8 @@ pnb_status create_context(const char* call, const char* config, std::shared_ptr<
   return status;
 }
 
+pnb_status creation_failed(pnb_status status, const std::string& message) { return record(nullptr, status, message.c_str()); }
+
 }  // namespace penumbra::insitu
 
 extern "C" {

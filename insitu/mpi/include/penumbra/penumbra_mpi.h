@@ -1,0 +1,44 @@
+/* SPDX-License-Identifier: BSD-3-Clause */
+/* insitu/mpi/include/penumbra/penumbra_mpi.h -- Penumbra over the ranks of an MPI communicator.
+ *
+ * Link Penumbra::mpi (libpenumbra_mpi) instead of Penumbra::insitu: it holds every function of
+ * penumbra.h and these. Each rank publishes its own partition: its cells and the points they use
+ * (points on partition boundaries appear on every rank that uses them), its fields on those
+ * points or cells. Each rank ray casts its own cells; the runs where each ray is inside a rank's
+ * cells are exchanged by image region through MPI, merged in depth order and composited, so the
+ * picture is that of the whole mesh rendered in one process, whatever the partition. Rank 0
+ * writes the image database.
+ *
+ * Collective (every rank of the communicator calls them, in the same order): pnb_create_mpi,
+ * pnb_publish_mesh, pnb_execute and pnb_destroy. A failure on any rank (a wrong count, NaN, a
+ * failed write) is returned by every rank's call, its message naming the rank, and no rank is
+ * left waiting. pnb_publish_field, pnb_last_step and pnb_last_error are local.
+ * Not yet over several ranks (refused at creation, naming the key): "store", and the lighting
+ * models "light-volume" and "occlusion"; a run on one rank takes every config. */
+#ifndef PENUMBRA_MPI_H
+#define PENUMBRA_MPI_H
+
+#include <mpi.h>
+
+#include "penumbra/core/export.h"
+#include "penumbra/penumbra.h"
+
+PNB_PUBLIC_BEGIN
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* pnb_create on the ranks of `comm` (MPI initialised by the caller; Penumbra works on its own
+ * duplicate of the communicator, so its messages never meet the solver's). */
+pnb_status pnb_create_mpi(const char* config, MPI_Comm comm, pnb_context* out);
+/* The same with a Fortran communicator handle (MPI_Fint, converted with MPI_Comm_f2c). */
+pnb_status pnb_create_mpi_f(const char* config, MPI_Fint comm, pnb_context* out);
+
+#ifdef __cplusplus
+}
+#endif
+
+PNB_PUBLIC_END
+
+#endif /* PENUMBRA_MPI_H */

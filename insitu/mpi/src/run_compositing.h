@@ -1,0 +1,24 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// insitu/mpi/src/run_compositing.h -- sort-last compositing of the ranks' ray runs
+#pragma once
+#include <mpi.h>
+
+#include "penumbra/render/image.h"
+#include "penumbra/render/renderer.h"
+
+namespace penumbra::insitu {
+
+/// Merges every rank's runs of one view (direct send): the image's rows are cut into one band per
+/// rank; each rank sends each other rank its runs in that rank's band (runs already lie in pixel
+/// order, so a band's are one contiguous stretch), puts the runs of each pixel of its own band in
+/// depth order and composites them front to back ("over", premultiplied colour); rank 0 gathers
+/// the bands. Exact on any partition: runs of different ranks never overlap in depth, so their
+/// order along a ray is the order of their entries. Returns the image on rank 0 and an empty one
+/// elsewhere. Collective over `comm`.
+render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int width, int height);
+
+/// One pixel's runs, in any order, composited front to back into rgba (premultiplied colour and
+/// opacity, as render::Image holds them); `runs` is sorted in place.
+void composite_pixel(std::vector<render::RayRun>& runs, float rgba[4]);
+
+}  // namespace penumbra::insitu

@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// tests/mpi/mpi_render_test.cpp -- one run over the ranks of MPI_COMM_WORLD, each publishing its
+// partition of a non-convex mesh, against the same mesh rendered whole in one process.
+//
+// Usage (under mpirun): penumbra_mpi_render_test OUT_DIR PARTITION LIGHTING BACKEND [FAIL_RANK]
+//   PARTITION  slabs (cells by centroid x) | round-robin (cell c on rank c mod ranks: every ray
+//              enters every rank many times, the worst case)
+//   LIGHTING   none | phong;  BACKEND cpu | gpu
+//   FAIL_RANK  that rank publishes a field of the wrong size at the first step: every rank's
+//              pnb_execute must fail naming it, and the next step must render.
+// Exits 0 on every rank when rank 0's pictures are the whole mesh's within RMS 0.1 % of 255 and
+// 2 levels (the runs of different ranks are composited in float32; the one-process render
+// stops a ray at opacity 0.999, the ranks' runs do not), else 1.
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fixtures/meshes.h"
+#include "penumbra/penumbra_mpi.h"
+#include "penumbra/render/image.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using penumbra::fixtures::OwnedMesh;
+
+double field_at(double x, double y, double z, int step) { return std::sin(5 * x + step) + std::cos(3 * y) + z; }
+
+// The cells of `whole` that `rank` owns, with the points they use (renumbered in first-use order).
+OwnedMesh partition(const OwnedMesh& whole, const std::string& kind, int rank, int ranks) {
+  OwnedMesh part;
+  std::map<std::int64_t, std::int64_t> local;
+  for (std::size_t c = 0; c < whole.cell_count(); ++c) {
+    const auto begin = static_cast<std::size_t>(whole.offsets[c]), end = static_cast<std::size_t>(whole.offsets[c + 1]);
+    double cx = 0;
+    for (std::size_t k = begin; k < end; ++k) cx += whole.xyz[3 * static_cast<std::size_t>(whole.connectivity[k])];
+    cx /= static_cast<double>(end - begin);
+    const int owner = kind == "slabs" ? std::min(ranks - 1, static_cast<int>(cx * ranks)) : static_cast<int>(c % static_cast<std::size_t>(ranks));
+    if (owner != rank) continue;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::int64_t g = whole.connectivity[k];
+      auto [it, added] = local.try_emplace(g, static_cast<std::int64_t>(part.point_count()));
+      if (added) part.add_point(whole.xyz[3 * g], whole.xyz[3 * g + 1], whole.xyz[3 * g + 2]);
+      part.connectivity.push_back(it->second);
+    }
+    part.offsets.push_back(static_cast<std::int64_t>(part.connectivity.size()));
+    part.types.push_back(whole.types[c]);
+  }
+  return part;
+}
+
+std::string config(const std::string& dir, const std::string& lighting, const std::string& backend) {
+  std::string c = R"({"output": {"directory": ")" + dir + R"("}, "backend": ")" + backend + R"(",
+      "image": {"width": 96, "height": 72}, "cameras": {"phi": [30, 210], "theta": [20]},
+      "fields": [{"name": "T", "transfer_function": {"colors": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.9, 0.2], [1, 1, 0.2, 0.1]],
+                                                     "opacities": [[0, 1], [1, 10]]}}])";
+  if (lighting == "phong") c += R"(, "lighting": {"model": "phong"})";
+  return c + "}";
+}
+
+bool ok(pnb_context ctx, pnb_status s, const char* what, int rank) {
+  if (s == PNB_OK) return true;
+  std::fprintf(stderr, "rank %d: %s: %s\n", rank, what, pnb_last_error(ctx));
+  return false;
+}
+
+// Publishes `mesh` and runs steps 0 and 1; with `fail`, step 0's field has one value too few.
+// Returns whether every call that should succeed did, and every call that should fail did.
+bool run(pnb_context ctx, const OwnedMesh& mesh, int rank, bool fail, int fail_rank) {
+  pnb_mesh_desc m = PNB_MESH_DESC_INIT;
+  m.points = mesh.xyz.data();
+  m.point_count = static_cast<int64_t>(mesh.point_count());
+  m.connectivity = mesh.connectivity.data();
+  m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
+  m.offsets = mesh.offsets.data();
+  m.cell_types = mesh.types.data();
+  m.cell_types_count = static_cast<int64_t>(mesh.types.size());
+  m.topology_version = 1;
+  if (!ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank)) return false;
+  bool good = true;
+  for (int step = 0; step < 2; ++step) {
+    const auto values = penumbra::fixtures::sample(mesh, [step](double x, double y, double z) { return field_at(x, y, z, step); });
+    pnb_field_desc f = PNB_FIELD_DESC_INIT;
+    f.name = "T";
+    f.values = values.data();
+    f.count = static_cast<int64_t>(values.size()) - (fail && step == 0 && rank == fail_rank ? 1 : 0);
+    const pnb_status published = pnb_publish_field(ctx, &f, PNB_BORROW);
+    const pnb_status executed = pnb_execute(ctx, step, step);
+    if (fail && step == 0) {
+      // Every rank's status names the failing rank.
+      const std::string text = pnb_last_error(ctx);
+      const bool named = executed != PNB_OK && text.find("rank " + std::to_string(fail_rank)) != std::string::npos;
+      if (!named) std::fprintf(stderr, "rank %d: expected step 0 to fail naming rank %d, got %d: %s\n", rank, fail_rank,
+                               static_cast<int>(executed), text.c_str());
+      good = good && named && (rank == fail_rank ? published != PNB_OK : published == PNB_OK);
+      continue;
+    }
+    good = ok(ctx, published, "pnb_publish_field", rank) && ok(ctx, executed, "pnb_execute", rank) && good;
+  }
+  return good;
+}
+
+// Rank 0: every image of `dir` against the same file under `reference`.
+bool same_pictures(const std::string& dir, const std::string& reference, bool fail) {
+  bool good = true;
+  int compared = 0;
+  for (const auto& e : fs::recursive_directory_iterator(reference)) {
+    if (e.path().extension() != ".png") continue;
+    const std::string rel = fs::relative(e.path(), reference).string();
+    if (fail && rel.find("c000000") != std::string::npos) continue;  // the failed step
+    int w1 = 0, h1 = 0, w2 = 0, h2 = 0;
+    const auto a = penumbra::render::read_png_rgb(e.path().string(), w1, h1);
+    const auto b = penumbra::render::read_png_rgb(dir + "/" + rel, w2, h2);
+    int worst = 0;
+    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) worst = std::max(worst, std::abs(int(a[i]) - int(b[i])));
+    const double rms = penumbra::render::rms_difference_pct(a, b);
+    std::printf("%s: RMS %.4f %%, %d levels at most\n", rel.c_str(), rms, worst);
+    good = good && a.size() == b.size() && rms <= 0.1 && worst <= 2;
+    ++compared;
+  }
+  return good && compared > 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (argc < 5) {
+    if (rank == 0) std::fprintf(stderr, "usage: %s OUT_DIR PARTITION LIGHTING BACKEND [FAIL_RANK]\n", argv[0]);
+    MPI_Finalize();
+    return 2;
+  }
+  const std::string out = argv[1], kind = argv[2], lighting = argv[3], backend = argv[4];
+  const bool fail = argc > 5;
+  const int fail_rank = fail ? std::atoi(argv[5]) : -1;
+  const std::string dir = out + "/ranks", reference = out + "/serial";
+  if (rank == 0) fs::remove_all(out);
+  MPI_Barrier(MPI_COMM_WORLD);
+
+  const OwnedMesh whole = penumbra::fixtures::tet_block_with_hole(8);
+  int good = 1;
+  pnb_context ctx = nullptr;
+  if (!ok(nullptr, pnb_create_mpi(config(dir, lighting, backend).c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank)) good = 0;
+  if (ctx) {
+    good = run(ctx, partition(whole, kind, rank, ranks), rank, fail, fail_rank) ? good : 0;
+    pnb_destroy(ctx);
+  }
+  if (rank == 0) {
+    pnb_context serial = nullptr;
+    if (!ok(nullptr, pnb_create(config(reference, lighting, backend).c_str(), &serial), "pnb_create", rank)) good = 0;
+    if (serial) {
+      good = run(serial, whole, rank, false, -1) ? good : 0;
+      pnb_destroy(serial);
+      good = same_pictures(dir, reference, fail) ? good : 0;
+    }
+  }
+  int all = 0;
+  MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return all ? 0 : 1;
+}
