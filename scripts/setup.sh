@@ -13,6 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libzfp-dev libzstd-dev libfpzip-dev
   libopenmpi-dev openmpi-bin  # penumbra_mpi and its tests under mpirun
+  libmetis-dev  # METIS partitions in the MPI tests
   gmsh  # benchmark meshes (bench/run.sh)
 )
 source "$(dirname "$0")/apt_install.sh"

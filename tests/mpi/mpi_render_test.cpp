@@ -3,7 +3,8 @@
 // partition of a non-convex mesh, against the same mesh rendered whole in one process.
 //
 // Usage (under mpirun): penumbra_mpi_render_test OUT_DIR PARTITION LIGHTING BACKEND [FAIL_RANK]
-//   PARTITION  slabs (cells by centroid x) | round-robin (cell c on rank c mod ranks: every ray
+//   PARTITION  slabs (cells by centroid x) | metis (METIS_PartMeshDual: non-convex parts, as a
+//              solver's partitioner cuts them) | round-robin (cell c on rank c mod ranks: every ray
 //              enters every rank many times, the worst case)
 //   LIGHTING   none | phong;  BACKEND cpu | gpu
 //   FAIL_RANK  that rank publishes a field of the wrong size at the first step: every rank's
@@ -14,11 +15,16 @@
 #include <mpi.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <string>
 #include <vector>
+
+#ifdef PNB_HAVE_METIS
+#include <metis.h>
+#endif
 
 #include "fixtures/meshes.h"
 #include "penumbra/penumbra_mpi.h"
@@ -31,17 +37,47 @@ using penumbra::fixtures::OwnedMesh;
 
 double field_at(double x, double y, double z, int step) { return std::sin(5 * x + step) + std::cos(3 * y) + z; }
 
-// The cells of `whole` that `rank` owns, with the points they use (renumbered in first-use order).
-OwnedMesh partition(const OwnedMesh& whole, const std::string& kind, int rank, int ranks) {
-  OwnedMesh part;
-  std::map<std::int64_t, std::int64_t> local;
-  for (std::size_t c = 0; c < whole.cell_count(); ++c) {
+// The rank that owns each cell of `whole` (a tet mesh over the unit cube).
+std::vector<int> owners(const OwnedMesh& whole, const std::string& kind, int ranks) {
+  const std::size_t cells = whole.cell_count();
+  std::vector<int> owner(cells, 0);
+  if (kind == "metis") {
+#ifdef PNB_HAVE_METIS
+    if (ranks == 1) return owner;
+    std::vector<idx_t> eptr(whole.offsets.begin(), whole.offsets.end()), eind(whole.connectivity.begin(), whole.connectivity.end());
+    idx_t ne = static_cast<idx_t>(cells), nn = static_cast<idx_t>(whole.point_count()), common = 3, parts = ranks, cut = 0;
+    std::vector<idx_t> epart(cells), npart(whole.point_count());
+    idx_t options[METIS_NOPTIONS];
+    METIS_SetDefaultOptions(options);
+    options[METIS_OPTION_SEED] = 7;  // the same parts on every rank and every run
+    if (METIS_PartMeshDual(&ne, &nn, eptr.data(), eind.data(), nullptr, nullptr, &common, &parts, nullptr, options, &cut,
+                           epart.data(), npart.data()) != METIS_OK)
+      std::abort();
+    for (std::size_t c = 0; c < cells; ++c) owner[c] = static_cast<int>(epart[c]);
+    return owner;
+#else
+    std::fprintf(stderr, "built without METIS\n");
+    std::abort();
+#endif
+  }
+  for (std::size_t c = 0; c < cells; ++c) {
     const auto begin = static_cast<std::size_t>(whole.offsets[c]), end = static_cast<std::size_t>(whole.offsets[c + 1]);
     double cx = 0;
     for (std::size_t k = begin; k < end; ++k) cx += whole.xyz[3 * static_cast<std::size_t>(whole.connectivity[k])];
     cx /= static_cast<double>(end - begin);
-    const int owner = kind == "slabs" ? std::min(ranks - 1, static_cast<int>(cx * ranks)) : static_cast<int>(c % static_cast<std::size_t>(ranks));
-    if (owner != rank) continue;
+    owner[c] = kind == "slabs" ? std::min(ranks - 1, static_cast<int>(cx * ranks)) : static_cast<int>(c % static_cast<std::size_t>(ranks));
+  }
+  return owner;
+}
+
+// The cells of `whole` that `rank` owns, with the points they use (renumbered in first-use order).
+OwnedMesh partition(const OwnedMesh& whole, const std::string& kind, int rank, int ranks) {
+  OwnedMesh part;
+  std::map<std::int64_t, std::int64_t> local;
+  const std::vector<int> owner = owners(whole, kind, ranks);
+  for (std::size_t c = 0; c < whole.cell_count(); ++c) {
+    const auto begin = static_cast<std::size_t>(whole.offsets[c]), end = static_cast<std::size_t>(whole.offsets[c + 1]);
+    if (owner[c] != rank) continue;
     for (std::size_t k = begin; k < end; ++k) {
       const std::int64_t g = whole.connectivity[k];
       auto [it, added] = local.try_emplace(g, static_cast<std::int64_t>(part.point_count()));
