@@ -130,6 +130,7 @@ penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
   v.cell_types = d.cell_types;
   v.cell_type_count = static_cast<std::size_t>(d.cell_types_count);
   v.topology_version = d.topology_version;
+  v.ghost_cells = d.cell_ghosts;
   if (d.offsets) {
     std::size_t cells = v.cell_type_count;
     if (cells == 1) {

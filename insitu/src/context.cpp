@@ -16,6 +16,8 @@
 #include <utility>
 
 #include "field_store.h"
+#include "ghost_cells.h"
+#include "penumbra/core/mesh_validation.h"
 #include "view_cameras.h"
 #include "image_writer.h"
 #include "penumbra/render/occlusion.h"
@@ -254,10 +256,23 @@ void Context::publish_mesh(const MeshView& mesh) {
   agreed("pnb_publish_mesh", [&] { apply_mesh_update(mesh, std::move(update), global); });
 }
 
+namespace {
+
+// The tets of the cells this rank renders: all, or those that are not ghosts (the ghosts still
+// count for the cell fields' averages at the points, so the whole mesh is validated).
+render::TetMesh prepare_own_cells(const MeshView& mesh) {
+  if (!mesh.ghost_cells) return render::prepare_tet_mesh(mesh, "pnb_publish_mesh");
+  validate_mesh(mesh, "pnb_publish_mesh");
+  const OwnCells own = without_ghosts(mesh);
+  require(own.types.size() > 0, "pnb_publish_mesh: every cell is a ghost; a rank publishes at least one cell of its own");
+  return render::prepare_tet_mesh(own.view, "pnb_publish_mesh (the cells that are not ghosts)");
+}
+
+}  // namespace
+
 Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {
   using Kind = MeshUpdate::Kind;
-  if (!m_mesh || m_mesh->view.topology_version != mesh.topology_version)
-    return {Kind::fresh, render::prepare_tet_mesh(mesh, "pnb_publish_mesh")};
+  if (!m_mesh || m_mesh->view.topology_version != mesh.topology_version) return {Kind::fresh, prepare_own_cells(mesh)};
   // Same topology. Counts are compared because they cost nothing and catch a solver that changed
   // its mesh but forgot to bump the version.
   require(mesh.point_count() == m_mesh->view.point_count() && mesh.cell_count() == m_mesh->view.cell_count(),
@@ -269,7 +284,7 @@ Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {
   if (!render::keeps_welds(*m_mesh->tets, mesh)) {
     log_line("pnb_publish_mesh: points that coincided when the mesh was prepared moved apart, which changes its "
              "adjacency: the mesh is prepared anew");
-    return {Kind::fresh, render::prepare_tet_mesh(mesh, "pnb_publish_mesh")};
+    return {Kind::fresh, prepare_own_cells(mesh)};
   }
   return {Kind::moved, render::move_tet_mesh(*m_mesh->tets, mesh, "pnb_publish_mesh")};
 }
@@ -305,6 +320,7 @@ void Context::prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::T
   }
   p->cell_types.assign(mesh.cell_types, mesh.cell_types + mesh.cell_type_count);
   p->view = mesh;
+  p->view.ghost_cells = nullptr;  // the prepared tets hold this rank's own cells already
   p->view.axes = {};  // the prepared copy is interleaved
   p->view.point_type = ScalarType::float64;
   p->view.connectivity.data = p->connectivity.data();
@@ -313,7 +329,8 @@ void Context::prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::T
   m_mesh = std::move(p);
   point_view_at_tets();
   ++m_preparations;
-  if (m_store) m_store->begin_segment(m_mesh->view);
+  // The store keeps this rank's own cells: a ghost is another rank's to keep.
+  if (m_store) m_store->begin_segment(mesh.ghost_cells ? without_ghosts(mesh).view : m_mesh->view);
   // Fields were sized for the old mesh.
   m_fields.clear();
 }

@@ -2,13 +2,17 @@
 // tests/mpi/mpi_render_test.cpp -- one run over the ranks of MPI_COMM_WORLD, each publishing its
 // partition of a non-convex mesh, against the same mesh rendered whole in one process.
 //
-// Usage (under mpirun): penumbra_mpi_render_test OUT_DIR PARTITION LIGHTING BACKEND [FAIL_RANK]
+// Usage (under mpirun): penumbra_mpi_render_test OUT_DIR PARTITION LIGHTING BACKEND [fail=RANK] [ghosts]
 //   PARTITION  slabs (cells by centroid x) | metis (METIS_PartMeshDual: non-convex parts, as a
 //              solver's partitioner cuts them) | round-robin (cell c on rank c mod ranks: every ray
 //              enters every rank many times, the worst case)
 //   LIGHTING   none | phong;  BACKEND cpu | gpu
-//   FAIL_RANK  that rank publishes a field of the wrong size at the first step: every rank's
+//   fail=RANK  that rank publishes a field of the wrong size at the first step: every rank's
 //              pnb_execute must fail naming it, and the next step must render.
+//   ghosts     each rank also publishes, as ghost cells (vtkGhostType), the cells of other ranks
+//              that share a point with its own, and a cell field C is rendered too: averaged at the
+//              points over the ghosts as well, it matches the one-process average at partition
+//              boundaries, and no ghost is drawn twice.
 // Exits 0 on every rank when rank 0's pictures are the whole mesh's within RMS 0.1 % of 255 and
 // 2 levels (the runs of different ranks are composited in float32; the one-process render
 // stops a ray at opacity 0.999, the ranks' runs do not), else 1.
@@ -70,31 +74,52 @@ std::vector<int> owners(const OwnedMesh& whole, const std::string& kind, int ran
   return owner;
 }
 
-// The cells of `whole` that `rank` owns, with the points they use (renumbered in first-use order).
-OwnedMesh partition(const OwnedMesh& whole, const std::string& kind, int rank, int ranks) {
-  OwnedMesh part;
+// A rank's part of the mesh: its cells (and with ghosts, the cells of other ranks that share a
+// point with them, marked ghost), the points they use (renumbered in first-use order), and each
+// cell's index in the whole mesh.
+struct Part {
+  OwnedMesh mesh;
+  std::vector<std::uint8_t> ghosts;
+  std::vector<std::size_t> whole_cell;
+};
+
+Part partition(const OwnedMesh& whole, const std::string& kind, int rank, int ranks, bool with_ghosts) {
+  Part part;
   std::map<std::int64_t, std::int64_t> local;
   const std::vector<int> owner = owners(whole, kind, ranks);
+  std::vector<char> touches(whole.point_count(), 0);  // points of this rank's own cells
+  for (std::size_t c = 0; c < whole.cell_count(); ++c)
+    if (owner[c] == rank)
+      for (auto k = whole.offsets[c]; k < whole.offsets[c + 1]; ++k) touches[static_cast<std::size_t>(whole.connectivity[static_cast<std::size_t>(k)])] = 1;
   for (std::size_t c = 0; c < whole.cell_count(); ++c) {
     const auto begin = static_cast<std::size_t>(whole.offsets[c]), end = static_cast<std::size_t>(whole.offsets[c + 1]);
-    if (owner[c] != rank) continue;
+    bool near = false;
+    for (std::size_t k = begin; k < end; ++k) near = near || touches[static_cast<std::size_t>(whole.connectivity[k])];
+    const bool ghost = owner[c] != rank;
+    if (ghost && !(with_ghosts && near)) continue;
+    part.ghosts.push_back(ghost ? 1 : 0);
+    part.whole_cell.push_back(c);
     for (std::size_t k = begin; k < end; ++k) {
       const std::int64_t g = whole.connectivity[k];
-      auto [it, added] = local.try_emplace(g, static_cast<std::int64_t>(part.point_count()));
-      if (added) part.add_point(whole.xyz[3 * g], whole.xyz[3 * g + 1], whole.xyz[3 * g + 2]);
-      part.connectivity.push_back(it->second);
+      auto [it, added] = local.try_emplace(g, static_cast<std::int64_t>(part.mesh.point_count()));
+      if (added) part.mesh.add_point(whole.xyz[3 * g], whole.xyz[3 * g + 1], whole.xyz[3 * g + 2]);
+      part.mesh.connectivity.push_back(it->second);
     }
-    part.offsets.push_back(static_cast<std::int64_t>(part.connectivity.size()));
-    part.types.push_back(whole.types[c]);
+    part.mesh.offsets.push_back(static_cast<std::int64_t>(part.mesh.connectivity.size()));
+    part.mesh.types.push_back(whole.types[c]);
   }
   return part;
 }
 
-std::string config(const std::string& dir, const std::string& lighting, const std::string& backend) {
+// A cell field over the whole mesh: its cells' index, scrambled (neighbouring cells differ).
+double cell_value(std::size_t whole_cell) { return static_cast<double>((whole_cell * 7919) % 101) / 100.0; }
+
+std::string config(const std::string& dir, const std::string& lighting, const std::string& backend, bool cell_field) {
   std::string c = R"({"output": {"directory": ")" + dir + R"("}, "backend": ")" + backend + R"(",
       "image": {"width": 96, "height": 72}, "cameras": {"phi": [30, 210], "theta": [20]},
       "fields": [{"name": "T", "transfer_function": {"colors": [[0, 0.1, 0.2, 0.9], [0.5, 0.9, 0.9, 0.2], [1, 1, 0.2, 0.1]],
-                                                     "opacities": [[0, 1], [1, 10]]}}])";
+                                                     "opacities": [[0, 1], [1, 10]]}})" +
+                  std::string(cell_field ? R"(, {"name": "C", "range": [0, 1]}])" : "]");
   if (lighting == "phong") c += R"(, "lighting": {"model": "phong"})";
   return c + "}";
 }
@@ -105,9 +130,10 @@ bool ok(pnb_context ctx, pnb_status s, const char* what, int rank) {
   return false;
 }
 
-// Publishes `mesh` and runs steps 0 and 1; with `fail`, step 0's field has one value too few.
+// Publishes `part` and runs steps 0 and 1; with `fail`, step 0's field has one value too few.
 // Returns whether every call that should succeed did, and every call that should fail did.
-bool run(pnb_context ctx, const OwnedMesh& mesh, int rank, bool fail, int fail_rank) {
+bool run(pnb_context ctx, const Part& part, int rank, bool fail, int fail_rank) {
+  const OwnedMesh& mesh = part.mesh;
   pnb_mesh_desc m = PNB_MESH_DESC_INIT;
   m.points = mesh.xyz.data();
   m.point_count = static_cast<int64_t>(mesh.point_count());
@@ -117,7 +143,16 @@ bool run(pnb_context ctx, const OwnedMesh& mesh, int rank, bool fail, int fail_r
   m.cell_types = mesh.types.data();
   m.cell_types_count = static_cast<int64_t>(mesh.types.size());
   m.topology_version = 1;
+  m.cell_ghosts = part.ghosts.empty() ? nullptr : part.ghosts.data();
   if (!ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank)) return false;
+  std::vector<double> cells(part.whole_cell.size());
+  for (std::size_t c = 0; c < cells.size(); ++c) cells[c] = cell_value(part.whole_cell[c]);
+  pnb_field_desc cf = PNB_FIELD_DESC_INIT;
+  cf.name = "C";
+  cf.association = PNB_CELL_FIELD;
+  cf.values = cells.data();
+  cf.count = static_cast<int64_t>(cells.size());
+  if (!ok(ctx, pnb_publish_field(ctx, &cf, PNB_COPY), "pnb_publish_field(C)", rank)) return false;
   bool good = true;
   for (int step = 0; step < 2; ++step) {
     const auto values = penumbra::fixtures::sample(mesh, [step](double x, double y, double z) { return field_at(x, y, z, step); });
@@ -175,8 +210,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string out = argv[1], kind = argv[2], lighting = argv[3], backend = argv[4];
-  const bool fail = argc > 5;
-  const int fail_rank = fail ? std::atoi(argv[5]) : -1;
+  int fail_rank = -1;
+  bool ghosts = false;
+  for (int a = 5; a < argc; ++a) {
+    const std::string option = argv[a];
+    if (option.rfind("fail=", 0) == 0) fail_rank = std::atoi(option.c_str() + 5);
+    ghosts = ghosts || option == "ghosts";
+  }
+  const bool fail = fail_rank >= 0;
   const std::string dir = out + "/ranks", reference = out + "/serial";
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
@@ -184,16 +225,17 @@ int main(int argc, char** argv) {
   const OwnedMesh whole = penumbra::fixtures::tet_block_with_hole(8);
   int good = 1;
   pnb_context ctx = nullptr;
-  if (!ok(nullptr, pnb_create_mpi(config(dir, lighting, backend).c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank)) good = 0;
+  if (!ok(nullptr, pnb_create_mpi(config(dir, lighting, backend, ghosts).c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank))
+    good = 0;
   if (ctx) {
-    good = run(ctx, partition(whole, kind, rank, ranks), rank, fail, fail_rank) ? good : 0;
+    good = run(ctx, partition(whole, kind, rank, ranks, ghosts), rank, fail, fail_rank) ? good : 0;
     pnb_destroy(ctx);
   }
   if (rank == 0) {
     pnb_context serial = nullptr;
-    if (!ok(nullptr, pnb_create(config(reference, lighting, backend).c_str(), &serial), "pnb_create", rank)) good = 0;
+    if (!ok(nullptr, pnb_create(config(reference, lighting, backend, ghosts).c_str(), &serial), "pnb_create", rank)) good = 0;
     if (serial) {
-      good = run(serial, whole, rank, false, -1) ? good : 0;
+      good = run(serial, partition(whole, kind, 0, 1, false), rank, false, -1) ? good : 0;
       pnb_destroy(serial);
       good = same_pictures(dir, reference, fail) ? good : 0;
     }

@@ -32,7 +32,7 @@ extern "C" {
 #endif
 
 /* The C ABI's version: bumped when a struct grows or a call is added. */
-#define PNB_ABI_VERSION 3
+#define PNB_ABI_VERSION 4
 
 typedef struct pnb_context_s* pnb_context;
 
@@ -82,10 +82,14 @@ typedef struct {
   const void* point_y;
   const void* point_z;
   int64_t point_axis_stride_bytes;
+  /* ABI 4: VTK's vtkGhostType per cell (uint8), or NULL. Cells with the duplicate-cell bit (1) are
+   * another rank's copies (a halo): their points' cell-field averages include them, but they are
+   * never rendered, lit or stored twice. */
+  const uint8_t* cell_ghosts;
 } pnb_mesh_desc;
 
 /* Every member at its default: no arrays, float64 points, int64 indices. */
-#define PNB_MESH_DESC_INIT {sizeof(pnb_mesh_desc), 0, 0, 0, PNB_FLOAT64, 0, 0, 0, PNB_INT64, 0, 0, 0, 0, 0, 0, 0}
+#define PNB_MESH_DESC_INIT {sizeof(pnb_mesh_desc), 0, 0, 0, PNB_FLOAT64, 0, 0, 0, PNB_INT64, 0, 0, 0, 0, 0, 0, 0, 0}
 
 /* One field: count items of `components` values each, in type (PNB_FLOAT32/64), stride_bytes
  * apart (0 means packed). */

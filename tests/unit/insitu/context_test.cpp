@@ -79,6 +79,53 @@ TEST(Context, UnchangedTopologyVersionSkipsPreparation) {
   EXPECT_THROW(ctx.publish_mesh(s.mesh.view()), Error);
 }
 
+// Cells marked ghost (vtkGhostType's duplicate bit) are another rank's halo: a mesh published
+// with half its cells as ghosts renders as the other half published alone.
+TEST(Context, GhostCellsAreNeverDrawn) {
+  TempDir tmp;
+  Scene s;
+  const std::size_t cells = s.mesh.cell_count();
+  std::vector<std::uint8_t> ghosts(cells, 0);
+  fixtures::OwnedMesh own;
+  own.xyz = s.mesh.xyz;
+  for (std::size_t c = 0; c < cells; ++c) {
+    const auto begin = s.mesh.offsets[c], end = s.mesh.offsets[c + 1];
+    double x = 0;
+    for (auto k = begin; k < end; ++k) x += s.mesh.xyz[3 * static_cast<std::size_t>(s.mesh.connectivity[static_cast<std::size_t>(k)])];
+    if (x / static_cast<double>(end - begin) > 0.5) {
+      ghosts[c] = 1;
+      continue;
+    }
+    own.connectivity.insert(own.connectivity.end(), s.mesh.connectivity.begin() + begin, s.mesh.connectivity.begin() + end);
+    own.offsets.push_back(static_cast<std::int64_t>(own.connectivity.size()));
+    own.types.push_back(s.mesh.types[c]);
+  }
+  MeshView with_ghosts = s.mesh.view();
+  with_ghosts.ghost_cells = ghosts.data();
+  std::vector<unsigned char> images[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string dir = tmp / (k ? "own" : "ghosts");
+    Context ctx(parse_config(testing::small_config(dir)));
+    ctx.publish_mesh(k ? own.view() : with_ghosts);
+    ctx.publish_field(fixtures::point_field("T", s.blob), false);
+    EXPECT_TRUE(ctx.execute(0.0, 0));
+    int w = 0, h = 0;
+    images[k] = image(dir, csv_rows(dir)[1][4], w, h);
+  }
+  EXPECT_EQ(images[0], images[1]);
+  // Every cell a ghost: nothing of this rank's own to draw, which is named.
+  std::vector<std::uint8_t> all(cells, 1);
+  with_ghosts.ghost_cells = all.data();
+  with_ghosts.topology_version = 7;
+  Context ctx(parse_config(testing::small_config(tmp / "none")));
+  try {
+    ctx.publish_mesh(with_ghosts);
+    ADD_FAILURE() << "expected a mesh of ghosts only to be refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("every cell is a ghost"), std::string::npos) << e.what();
+  }
+}
+
 // A solver's x[], y[], z[] published as three arrays give the picture of the interleaved points.
 TEST(Context, ThreeCoordinateArraysRenderLikeInterleavedPoints) {
   TempDir tmp;

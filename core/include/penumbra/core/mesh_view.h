@@ -78,6 +78,12 @@ struct MeshView {
   const std::uint8_t* cell_types = nullptr;
   std::size_t cell_type_count = 0;
   std::uint64_t topology_version = 0;
+  /// VTK's vtkGhostType per cell, or null: a cell with the duplicate-cell bit (kDuplicateCell) is
+  /// another rank's copy, kept for what its points average (cell fields) but never rendered, lit
+  /// or stored as this rank's.
+  const std::uint8_t* ghost_cells = nullptr;
+  static constexpr std::uint8_t kDuplicateCell = 1;  ///< vtkDataSetAttributes::DUPLICATECELL
+  bool ghost(std::size_t c) const { return ghost_cells != nullptr && (ghost_cells[c] & kDuplicateCell) != 0; }
 
   std::size_t point_count() const { return points.count; }
   /// Number of cells implied by offsets or, for a uniform mesh, connectivity / points-per-cell.
