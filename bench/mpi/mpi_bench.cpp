@@ -1,0 +1,239 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// bench/mpi/mpi_bench.cpp -- sort-last compositing of ray runs over MPI ranks, on a benchmark scene
+// cut into slabs, METIS parts or cells dealt round-robin, against the scene rendered in one process
+//
+// Usage (under mpirun): pnb_bench_mpi --scene NAME --data-dir DIR [--frames N] [--sizes "512"]
+//        [--partitions "slabs metis round-robin"] [--lit "none phong"]
+// Prints one JSON line per partition, lighting and image size, from rank 0:
+//   render_ms        median over ranks of each rank's median local ray casting with runs (CPU),
+//                    and render_ms_max, the slowest rank's
+//   composite_ms     median compositing (the runs' exchange by image band, the merge in depth
+//                    order, the gather to rank 0), slowest rank
+//   bytes_per_rank   bytes each rank sends and receives in the exchange (runs 24 B, counts 4 B per
+//                    pixel of a band; mean over ranks) and bytes_per_rank_max
+//   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs
+//   rms_vs_serial_pct, max_level_diff   rank 0's composited image against the whole scene
+//                    rendered by one CPU ray caster in this process
+// With 2 cores, timings beyond 2 ranks measure oversubscription; bytes and runs do not.
+#include <mpi.h>
+
+#include <nlohmann/json.hpp>
+
+#ifdef PNB_HAVE_METIS
+#include <metis.h>
+#endif
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "penumbra/core/error.h"
+#include "penumbra/render/cpu_ray_caster.h"
+#include "penumbra/render/image.h"
+#include "run_compositing.h"
+#include "scene.h"
+#include "scene_views.h"
+
+namespace pb = penumbra::bench;
+namespace pr = penumbra::render;
+
+namespace {
+
+// The rank of each tet of `scene`; METIS's parts are computed on rank 0 and broadcast.
+std::vector<int> owners(const pb::Scene& scene, const std::string& kind, int rank, int ranks) {
+  const std::size_t nt = scene.tet_count();
+  std::vector<int> owner(nt, 0);
+  if (ranks == 1) return owner;
+  if (kind == "round-robin") {
+    for (std::size_t t = 0; t < nt; ++t) owner[t] = static_cast<int>(t % static_cast<std::size_t>(ranks));
+    return owner;
+  }
+  if (kind == "metis") {
+#ifdef PNB_HAVE_METIS
+    if (rank == 0) {
+      std::vector<idx_t> eptr(nt + 1), eind(scene.tets.begin(), scene.tets.end());
+      for (std::size_t t = 0; t <= nt; ++t) eptr[t] = static_cast<idx_t>(4 * t);
+      idx_t ne = static_cast<idx_t>(nt), nn = static_cast<idx_t>(scene.point_count()), common = 3, parts = ranks, cut = 0;
+      std::vector<idx_t> epart(nt), npart(scene.point_count());
+      idx_t options[METIS_NOPTIONS];
+      METIS_SetDefaultOptions(options);
+      penumbra::require(METIS_PartMeshDual(&ne, &nn, eptr.data(), eind.data(), nullptr, nullptr, &common, &parts, nullptr,
+                                           options, &cut, epart.data(), npart.data()) == METIS_OK,
+                        "pnb_bench_mpi: METIS_PartMeshDual failed");
+      for (std::size_t t = 0; t < nt; ++t) owner[t] = static_cast<int>(epart[t]);
+    }
+    MPI_Bcast(owner.data(), static_cast<int>(nt), MPI_INT, 0, MPI_COMM_WORLD);
+    return owner;
+#else
+    throw penumbra::Error(penumbra::ErrorCode::invalid_argument, "pnb_bench_mpi: built without METIS (libmetis-dev)");
+#endif
+  }
+  penumbra::require(kind == "slabs", "pnb_bench_mpi: partition '" + kind + "'; expected slabs, metis or round-robin");
+  double lo = 1e300, hi = -1e300;
+  for (std::size_t p = 0; p < scene.point_count(); ++p) lo = std::min(lo, scene.points[3 * p]), hi = std::max(hi, scene.points[3 * p]);
+  for (std::size_t t = 0; t < nt; ++t) {
+    double x = 0;
+    for (int k = 0; k < 4; ++k) x += scene.points[3 * static_cast<std::size_t>(scene.tets[4 * t + static_cast<std::size_t>(k)])];
+    owner[t] = std::min(ranks - 1, static_cast<int>((x / 4 - lo) / (hi - lo) * ranks));
+  }
+  return owner;
+}
+
+// This rank's tets over the points they use, and the scalars there.
+struct Part {
+  std::vector<double> xyz;
+  std::vector<std::int64_t> tets;
+  std::vector<float> scalars;
+};
+
+Part part_of(const pb::Scene& scene, const std::vector<int>& owner, int rank) {
+  Part part;
+  std::map<std::int64_t, std::int64_t> local;
+  for (std::size_t t = 0; t < scene.tet_count(); ++t) {
+    if (owner[t] != rank) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::int64_t g = scene.tets[4 * t + static_cast<std::size_t>(k)];
+      auto [it, added] = local.try_emplace(g, static_cast<std::int64_t>(part.scalars.size()));
+      if (added) {
+        part.xyz.insert(part.xyz.end(), {scene.points[3 * g], scene.points[3 * g + 1], scene.points[3 * g + 2]});
+        part.scalars.push_back(scene.scalars[static_cast<std::size_t>(g)]);
+      }
+      part.tets.push_back(it->second);
+    }
+  }
+  return part;
+}
+
+std::shared_ptr<const pr::TetMesh> prepare(const std::vector<double>& xyz, const std::vector<std::int64_t>& tets) {
+  static const std::uint8_t kTetra = 10;
+  penumbra::MeshView v;
+  v.points = {reinterpret_cast<const std::byte*>(xyz.data()), xyz.size() / 3, 3 * sizeof(double)};
+  v.point_type = penumbra::ScalarType::float64;
+  v.connectivity = {tets.data(), tets.size(), penumbra::ScalarType::int64};
+  v.cell_types = &kTetra;
+  v.cell_type_count = 1;
+  v.topology_version = 1;
+  return std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(v, "pnb_bench_mpi"));
+}
+
+// The bytes this rank sends to and receives from the others in one composite of `runs`: for each
+// other rank's band, its runs (24 B) and a count per pixel (4 B).
+double exchanged_bytes(const pr::RayRuns& runs, int width, int height, int rank, int ranks) {
+  auto band = [&](int b) { return static_cast<std::size_t>(static_cast<long long>(height) * b / ranks) * static_cast<std::size_t>(width); };
+  std::vector<double> sent(static_cast<std::size_t>(ranks), 0.0), received(static_cast<std::size_t>(ranks), 0.0);
+  for (int b = 0; b < ranks; ++b)
+    if (b != rank)
+      sent[static_cast<std::size_t>(b)] = 24.0 * (runs.offsets[band(b + 1)] - runs.offsets[band(b)]) + 4.0 * static_cast<double>(band(b + 1) - band(b));
+  MPI_Alltoall(sent.data(), 1, MPI_DOUBLE, received.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+  double total = 0;
+  for (int r = 0; r < ranks; ++r) total += sent[static_cast<std::size_t>(r)] + received[static_cast<std::size_t>(r)];
+  return total;
+}
+
+struct Stats {
+  double median = 0, max = 0;
+};
+Stats over_ranks(double mine) {
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  std::vector<double> all(static_cast<std::size_t>(ranks));
+  MPI_Allgather(&mine, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+  return {pb::median(all), *std::max_element(all.begin(), all.end())};
+}
+
+int run(int argc, char** argv) {
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  const std::string name = pb::option(argc, argv, "scene", "holeblock-1m");
+  const std::string data_dir = pb::option(argc, argv, "data-dir", "");
+  const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
+  penumbra::require(!data_dir.empty(), "pnb_bench_mpi: --data-dir DIR is required");
+  const pb::Scene scene = pb::load_scene(name, data_dir);
+  const pr::TransferFunction tf = pb::transfer_function(scene);
+  std::istringstream partitions(pb::option(argc, argv, "partitions", "slabs metis round-robin"));
+  std::vector<std::string> lits, sizes;
+  for (std::istringstream in(pb::option(argc, argv, "lit", "none phong")); in;) {
+    std::string s;
+    if (in >> s) lits.push_back(s);
+  }
+  for (std::istringstream in(pb::option(argc, argv, "sizes", "512")); in;) {
+    std::string s;
+    if (in >> s) sizes.push_back(s);
+  }
+  // The whole scene in one process, on rank 0: the reference picture of every line.
+  std::unique_ptr<pr::CpuRayCaster> whole;
+  if (rank == 0) whole = std::make_unique<pr::CpuRayCaster>(prepare(scene.points, scene.tets));
+  for (std::string partition; partitions >> partition;) {
+    const Part part = part_of(scene, owners(scene, partition, rank, ranks), rank);
+    pr::CpuRayCaster caster(prepare(part.xyz, part.tets));
+    for (const std::string& size : sizes)
+      for (const std::string& lit : lits) {
+        const int side = std::stoi(size);
+        const pr::Camera camera = pb::camera(scene, side, side);
+        pr::RenderOptions options;
+        if (lit == "phong") options.shading.model = pr::LightingModel::phong;
+        pr::RenderOptions with_runs = options;
+        with_runs.ray_runs = true;
+        std::vector<double> render, composite;
+        pr::RenderOutput out;
+        pr::Image image;
+        for (int f = 0; f < frames; ++f) {
+          MPI_Barrier(MPI_COMM_WORLD);
+          pb::Stopwatch r;
+          caster.render(part.scalars, tf, camera, with_runs, out);
+          render.push_back(r.ms());
+          MPI_Barrier(MPI_COMM_WORLD);
+          pb::Stopwatch c;
+          image = penumbra::insitu::composite_runs(MPI_COMM_WORLD, out.runs, side, side);
+          composite.push_back(c.ms());
+        }
+        const double runs_here = static_cast<double>(out.runs.runs.size());
+        double runs_total = 0;
+        MPI_Reduce(&runs_here, &runs_total, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+        const Stats render_s = over_ranks(pb::median(render)), composite_s = over_ranks(pb::median(composite));
+        const Stats bytes = over_ranks(exchanged_bytes(out.runs, side, side, rank, ranks));
+        const Stats runs_mb = over_ranks(runs_here * sizeof(pr::RayRun) / (1 << 20));
+        if (rank != 0) continue;
+        const auto serial = pr::to_rgb8(whole->render(scene.scalars, tf, camera, options), scene.background);
+        const pb::ImageError e = pb::compare_rgb8(pr::to_rgb8(image, scene.background), serial);
+        nlohmann::ordered_json line;
+        line["bench"] = "mpi";
+        line["scene"] = scene.name;
+        line["tets"] = scene.tet_count();
+        line["ranks"] = ranks;
+        line["partition"] = partition;
+        line["lit"] = lit;
+        line["width"] = side;
+        line["render_ms"] = pb::rounded(render_s.median, 1);
+        line["render_ms_max"] = pb::rounded(render_s.max, 1);
+        line["composite_ms"] = pb::rounded(composite_s.max, 1);
+        line["bytes_per_rank"] = pb::rounded(bytes.median, 0);
+        line["bytes_per_rank_max"] = pb::rounded(bytes.max, 0);
+        line["runs_per_pixel"] = pb::rounded(runs_total / (static_cast<double>(side) * side), 3);
+        line["runs_mb_max"] = pb::rounded(runs_mb.max, 1);
+        line["rms_vs_serial_pct"] = pb::rounded(e.rms_pct, 4);
+        line["max_level_diff"] = e.max_abs;
+        line["frames"] = frames;
+        line["load_avg"] = pb::load_average();
+        std::cout << line.dump() << std::endl;
+      }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  const int status = pb::guarded_main("pnb_bench_mpi", run, argc, argv);
+  if (status != 0) MPI_Abort(MPI_COMM_WORLD, status);
+  MPI_Finalize();
+  return status;
+}
