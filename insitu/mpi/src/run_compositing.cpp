@@ -36,17 +36,21 @@ struct RunType {
 
 }  // namespace
 
+void composite_in_order(const render::RayRun* runs, std::size_t count, float rgba[4]) {
+  double rgb[3] = {0, 0, 0}, transmittance = 1;
+  for (std::size_t i = 0; i < count; ++i) {
+    for (int c = 0; c < 3; ++c) rgb[c] += transmittance * runs[i].rgba[c];
+    transmittance *= 1.0 - runs[i].rgba[3];
+  }
+  for (int c = 0; c < 3; ++c) rgba[c] = static_cast<float>(rgb[c]);
+  rgba[3] = static_cast<float>(1.0 - transmittance);
+}
+
 void composite_pixel(std::vector<render::RayRun>& runs, float rgba[4]) {
   std::sort(runs.begin(), runs.end(), [](const render::RayRun& a, const render::RayRun& b) {
     return a.entry_depth != b.entry_depth ? a.entry_depth < b.entry_depth : a.exit_depth < b.exit_depth;
   });
-  double rgb[3] = {0, 0, 0}, transmittance = 1;
-  for (const render::RayRun& r : runs) {
-    for (int c = 0; c < 3; ++c) rgb[c] += transmittance * r.rgba[c];
-    transmittance *= 1.0 - r.rgba[3];
-  }
-  for (int c = 0; c < 3; ++c) rgba[c] = static_cast<float>(rgb[c]);
-  rgba[3] = static_cast<float>(1.0 - transmittance);
+  composite_in_order(runs.data(), runs.size(), rgba);
 }
 
 render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int width, int height) {
@@ -93,12 +97,24 @@ render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int wid
                           recv_at.data(), run_type.type, comm),
             "MPI_Alltoallv of runs");
 
-  // This rank's band: each pixel's runs from every rank, in depth order, composited.
+  // This rank's band: each pixel's runs from every rank, in depth order, composited. A pixel whose
+  // runs all come from one rank takes them as they are (a rank's runs are front to back already);
+  // only pixels that several ranks cover are sorted.
   std::vector<float> band(4 * (mine1 - mine0));
   std::vector<std::size_t> cursor(recv_at.begin(), recv_at.end());
   std::vector<render::RayRun> pixel;
   for (std::size_t p = 0; p < mine1 - mine0; ++p) {
     pixel.clear();
+    int sources = 0, only = 0;
+    for (int s = 0; s < size; ++s)
+      if (got_counts[static_cast<std::size_t>(s) * (mine1 - mine0) + p] > 0) ++sources, only = s;
+    if (sources <= 1) {
+      const std::uint32_t n = got_counts[static_cast<std::size_t>(only) * (mine1 - mine0) + p];
+      std::size_t& at = cursor[static_cast<std::size_t>(only)];
+      composite_in_order(&got[at], n, &band[4 * p]);
+      at += n;
+      continue;
+    }
     for (int s = 0; s < size; ++s) {
       const std::uint32_t n = got_counts[static_cast<std::size_t>(s) * (mine1 - mine0) + p];
       std::size_t& at = cursor[static_cast<std::size_t>(s)];

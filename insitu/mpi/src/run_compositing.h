@@ -17,8 +17,11 @@ namespace penumbra::insitu {
 /// elsewhere. Collective over `comm`.
 render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int width, int height);
 
-/// One pixel's runs, in any order, composited front to back into rgba (premultiplied colour and
-/// opacity, as render::Image holds them); `runs` is sorted in place.
+/// `count` runs of one pixel, front to back, composited into rgba (premultiplied colour and
+/// opacity, as render::Image holds them).
+void composite_in_order(const render::RayRun* runs, std::size_t count, float rgba[4]);
+
+/// One pixel's runs, in any order: sorted in place by depth, then composited.
 void composite_pixel(std::vector<render::RayRun>& runs, float rgba[4]);
 
 }  // namespace penumbra::insitu
