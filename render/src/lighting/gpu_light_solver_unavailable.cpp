@@ -25,6 +25,7 @@ GpuLightSolver::GpuLightSolver(std::shared_ptr<GpuDevice>, const TetMesh&, const
   unavailable();
 }
 GpuLightSolver::~GpuLightSolver() = default;
+void GpuLightSolver::move_points(const TetMesh&, const Level1Topology&, const std::vector<float>&) { unavailable(); }
 void GpuLightSolver::set_grid(const Level0Grid&) { unavailable(); }
 void GpuLightSolver::set_field(const Level0Grid&, const Level1Field&) { unavailable(); }
 std::shared_ptr<GpuLightBuffers> GpuLightSolver::new_light() { unavailable(); }
