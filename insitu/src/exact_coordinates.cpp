@@ -49,7 +49,7 @@ void ExactCoordinateWriter::append(double time, const std::vector<Vec3d>& points
                                          " points for a log of " + std::to_string(m_points));
   std::vector<unsigned char> record(record_bytes(m_points));
   std::memcpy(record.data(), &time, 8);
-  std::memcpy(record.data() + 8, points.data(), 24 * m_points);  // Vec3d is three packed doubles
+  if (m_points > 0) std::memcpy(record.data() + 8, points.data(), 24 * m_points);  // Vec3d is three packed doubles
   const std::uint64_t sum = fnv1a(record.data(), record.size() - 8);
   std::memcpy(record.data() + record.size() - 8, &sum, 8);
   if (std::fwrite(record.data(), 1, record.size(), m_file) != record.size() || std::fflush(m_file) != 0) {
@@ -101,7 +101,7 @@ void ExactCoordinateReader::read(std::size_t index, std::vector<double>& xyz) co
     bad(m_path, "record " + std::to_string(index) + " (time " + std::to_string(m_times[index]) +
                     ") fails its checksum (corrupt file)");
   xyz.resize(3 * m_points);
-  std::memcpy(xyz.data(), record.data() + 8, 24 * m_points);
+  if (m_points > 0) std::memcpy(xyz.data(), record.data() + 8, 24 * m_points);  // an empty vector's data() may be null
 }
 
 }  // namespace penumbra::insitu
