@@ -9,8 +9,8 @@
 //                    and render_ms_max, the slowest rank's
 //   composite_ms     median compositing (the runs' exchange by image band, the merge in depth
 //                    order, the gather to rank 0), slowest rank
-//   bytes_per_rank   bytes each rank sends and receives in the exchange (runs 24 B, counts 4 B per
-//                    pixel of a band; mean over ranks) and bytes_per_rank_max
+//   bytes_per_rank   bytes each rank sends and receives in the exchange (runs 24 B, 8 B per pixel
+//                    that has runs; mean over ranks) and bytes_per_rank_max
 //   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs
 //   rms_vs_serial_pct, max_level_diff   rank 0's composited image against the whole scene
 //                    rendered by one CPU ray caster in this process
@@ -123,13 +123,16 @@ std::shared_ptr<const pr::TetMesh> prepare(const std::vector<double>& xyz, const
 }
 
 // The bytes this rank sends to and receives from the others in one composite of `runs`: for each
-// other rank's band, its runs (24 B) and a count per pixel (4 B).
+// other rank's band, its runs (24 B) and, per pixel that has runs, its place and count (8 B).
 double exchanged_bytes(const pr::RayRuns& runs, int width, int height, int rank, int ranks) {
   auto band = [&](int b) { return static_cast<std::size_t>(static_cast<long long>(height) * b / ranks) * static_cast<std::size_t>(width); };
   std::vector<double> sent(static_cast<std::size_t>(ranks), 0.0), received(static_cast<std::size_t>(ranks), 0.0);
-  for (int b = 0; b < ranks; ++b)
-    if (b != rank)
-      sent[static_cast<std::size_t>(b)] = 24.0 * (runs.offsets[band(b + 1)] - runs.offsets[band(b)]) + 4.0 * static_cast<double>(band(b + 1) - band(b));
+  for (int b = 0; b < ranks; ++b) {
+    if (b == rank) continue;
+    double covered = 0;
+    for (std::size_t p = band(b); p < band(b + 1); ++p) covered += runs.offsets[p + 1] > runs.offsets[p] ? 1 : 0;
+    sent[static_cast<std::size_t>(b)] = 24.0 * (runs.offsets[band(b + 1)] - runs.offsets[band(b)]) + 8.0 * covered;
+  }
   MPI_Alltoall(sent.data(), 1, MPI_DOUBLE, received.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
   double total = 0;
   for (int r = 0; r < ranks; ++r) total += sent[static_cast<std::size_t>(r)] + received[static_cast<std::size_t>(r)];

@@ -57,41 +57,48 @@ render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int wid
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
-  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  // Runs per pixel, and where each band's runs start.
-  std::vector<std::uint32_t> counts(pixels, 0);
-  if (!runs.empty())
-    for (std::size_t p = 0; p < pixels; ++p) counts[p] = runs.offsets[p + 1] - runs.offsets[p];
+  const auto ranks = static_cast<std::size_t>(size);
   auto first_run = [&](std::size_t pixel) { return runs.empty() ? std::size_t{0} : static_cast<std::size_t>(runs.offsets[pixel]); };
 
-  std::vector<int> send_runs(static_cast<std::size_t>(size)), send_at(static_cast<std::size_t>(size));
-  std::vector<int> send_pixels(static_cast<std::size_t>(size)), pixel_at(static_cast<std::size_t>(size));
+  // Per destination band: the pixels that have runs, as (pixel within the band, runs) pairs in
+  // pixel order (a pixel no ray of this rank's cells reaches costs nothing), and the runs.
+  std::vector<std::uint32_t> pairs;
+  std::vector<int> send(2 * ranks), send_pairs(ranks), pairs_at(ranks), send_runs(ranks), send_at(ranks);
+  std::vector<int> band_pixels(ranks), pixel_at(ranks);
   for (int b = 0; b < size; ++b) {
     const std::size_t p0 = band_begin(b, size, width, height), p1 = band_begin(b + 1, size, width, height);
-    send_pixels[static_cast<std::size_t>(b)] = to_count(p1 - p0, "a band's pixels");
-    pixel_at[static_cast<std::size_t>(b)] = to_count(p0, "the image's pixels");
-    send_runs[static_cast<std::size_t>(b)] = to_count(first_run(p1) - first_run(p0), "a band's runs");
-    send_at[static_cast<std::size_t>(b)] = to_count(first_run(p0), "a view's runs");
+    const auto bi = static_cast<std::size_t>(b);
+    band_pixels[bi] = to_count(p1 - p0, "a band's pixels");
+    pixel_at[bi] = to_count(p0, "the image's pixels");
+    pairs_at[bi] = to_count(pairs.size(), "the covered pixels");
+    for (std::size_t p = p0; p < p1 && !runs.empty(); ++p)
+      if (const std::uint32_t n = runs.offsets[p + 1] - runs.offsets[p]; n > 0) pairs.insert(pairs.end(), {static_cast<std::uint32_t>(p - p0), n});
+    send_pairs[bi] = to_count(pairs.size() - static_cast<std::size_t>(pairs_at[bi]), "the covered pixels");
+    send_runs[bi] = to_count(first_run(p1) - first_run(p0), "a band's runs");
+    send_at[bi] = to_count(first_run(p0), "a view's runs");
+    send[2 * bi] = send_pairs[bi];
+    send[2 * bi + 1] = send_runs[bi];
   }
   const std::size_t mine0 = band_begin(rank, size, width, height), mine1 = band_begin(rank + 1, size, width, height);
-  const int band_pixels = to_count(mine1 - mine0, "a band's pixels");
 
-  // How many runs each rank sends here; then the counts per pixel and the runs themselves.
-  std::vector<int> recv_runs(static_cast<std::size_t>(size));
-  check_mpi(MPI_Alltoall(send_runs.data(), 1, MPI_INT, recv_runs.data(), 1, MPI_INT, comm), "MPI_Alltoall of run counts");
-  std::vector<int> recv_pixels(static_cast<std::size_t>(size), band_pixels), recv_pixel_at(static_cast<std::size_t>(size));
-  std::vector<int> recv_at(static_cast<std::size_t>(size));
-  std::size_t total = 0;
-  for (int s = 0; s < size; ++s) {
-    recv_pixel_at[static_cast<std::size_t>(s)] = to_count(static_cast<std::size_t>(s) * (mine1 - mine0), "the received counts");
-    recv_at[static_cast<std::size_t>(s)] = to_count(total, "the received runs");
-    total += static_cast<std::size_t>(recv_runs[static_cast<std::size_t>(s)]);
+  // What each rank sends here; then the pairs and the runs themselves.
+  std::vector<int> got_sizes(2 * ranks);
+  check_mpi(MPI_Alltoall(send.data(), 2, MPI_INT, got_sizes.data(), 2, MPI_INT, comm), "MPI_Alltoall of run counts");
+  std::vector<int> recv_pairs(ranks), recv_pairs_at(ranks), recv_runs(ranks), recv_at(ranks);
+  std::size_t total_pairs = 0, total_runs = 0;
+  for (std::size_t s = 0; s < ranks; ++s) {
+    recv_pairs[s] = got_sizes[2 * s];
+    recv_runs[s] = got_sizes[2 * s + 1];
+    recv_pairs_at[s] = to_count(total_pairs, "the received pixels");
+    recv_at[s] = to_count(total_runs, "the received runs");
+    total_pairs += static_cast<std::size_t>(recv_pairs[s]);
+    total_runs += static_cast<std::size_t>(recv_runs[s]);
   }
-  std::vector<std::uint32_t> got_counts(static_cast<std::size_t>(size) * (mine1 - mine0));
-  check_mpi(MPI_Alltoallv(counts.data(), send_pixels.data(), pixel_at.data(), MPI_UINT32_T, got_counts.data(),
-                          recv_pixels.data(), recv_pixel_at.data(), MPI_UINT32_T, comm),
-            "MPI_Alltoallv of runs per pixel");
-  std::vector<render::RayRun> got(total);
+  std::vector<std::uint32_t> got_pairs(total_pairs);
+  check_mpi(MPI_Alltoallv(pairs.data(), send_pairs.data(), pairs_at.data(), MPI_UINT32_T, got_pairs.data(), recv_pairs.data(),
+                          recv_pairs_at.data(), MPI_UINT32_T, comm),
+            "MPI_Alltoallv of the covered pixels");
+  std::vector<render::RayRun> got(total_runs);
   const RunType run_type;
   check_mpi(MPI_Alltoallv(runs.runs.data(), send_runs.data(), send_at.data(), run_type.type, got.data(), recv_runs.data(),
                           recv_at.data(), run_type.type, comm),
@@ -101,25 +108,31 @@ render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int wid
   // runs all come from one rank takes them as they are (a rank's runs are front to back already);
   // only pixels that several ranks cover are sorted.
   std::vector<float> band(4 * (mine1 - mine0));
-  std::vector<std::size_t> cursor(recv_at.begin(), recv_at.end());
+  std::vector<std::size_t> run_at(recv_at.begin(), recv_at.end()), pair_at(recv_pairs_at.begin(), recv_pairs_at.end());
+  std::vector<std::uint32_t> here(ranks);  // runs of each source at the current pixel
   std::vector<render::RayRun> pixel;
   for (std::size_t p = 0; p < mine1 - mine0; ++p) {
-    pixel.clear();
     int sources = 0, only = 0;
-    for (int s = 0; s < size; ++s)
-      if (got_counts[static_cast<std::size_t>(s) * (mine1 - mine0) + p] > 0) ++sources, only = s;
+    for (std::size_t s = 0; s < ranks; ++s) {
+      const std::size_t end = static_cast<std::size_t>(recv_pairs_at[s] + recv_pairs[s]);
+      here[s] = pair_at[s] < end && got_pairs[pair_at[s]] == p ? got_pairs[pair_at[s] + 1] : 0;
+      if (here[s] > 0) {
+        pair_at[s] += 2;
+        ++sources;
+        only = static_cast<int>(s);
+      }
+    }
     if (sources <= 1) {
-      const std::uint32_t n = got_counts[static_cast<std::size_t>(only) * (mine1 - mine0) + p];
-      std::size_t& at = cursor[static_cast<std::size_t>(only)];
-      composite_in_order(&got[at], n, &band[4 * p]);
-      at += n;
+      std::size_t& at = run_at[static_cast<std::size_t>(only)];
+      composite_in_order(got.data() + at, here[static_cast<std::size_t>(only)], &band[4 * p]);
+      at += here[static_cast<std::size_t>(only)];
       continue;
     }
-    for (int s = 0; s < size; ++s) {
-      const std::uint32_t n = got_counts[static_cast<std::size_t>(s) * (mine1 - mine0) + p];
-      std::size_t& at = cursor[static_cast<std::size_t>(s)];
-      pixel.insert(pixel.end(), got.begin() + static_cast<std::ptrdiff_t>(at), got.begin() + static_cast<std::ptrdiff_t>(at + n));
-      at += n;
+    pixel.clear();
+    for (std::size_t s = 0; s < ranks; ++s) {
+      pixel.insert(pixel.end(), got.begin() + static_cast<std::ptrdiff_t>(run_at[s]),
+                   got.begin() + static_cast<std::ptrdiff_t>(run_at[s] + here[s]));
+      run_at[s] += here[s];
     }
     composite_pixel(pixel, &band[4 * p]);
   }
@@ -128,7 +141,7 @@ render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int wid
   render::Image image;
   std::vector<int> band_floats(static_cast<std::size_t>(size)), band_at(static_cast<std::size_t>(size));
   for (int b = 0; b < size; ++b) {
-    band_floats[static_cast<std::size_t>(b)] = to_count(4 * static_cast<std::size_t>(send_pixels[static_cast<std::size_t>(b)]), "a band's values");
+    band_floats[static_cast<std::size_t>(b)] = to_count(4 * static_cast<std::size_t>(band_pixels[static_cast<std::size_t>(b)]), "a band's values");
     band_at[static_cast<std::size_t>(b)] = to_count(4 * static_cast<std::size_t>(pixel_at[static_cast<std::size_t>(b)]), "the image's values");
   }
   if (rank == 0) image = render::Image(width, height);
