@@ -13,13 +13,6 @@
 namespace penumbra::insitu {
 namespace {
 
-// The step of `file` at `time`, or -1.
-std::int64_t step_at(const compression::CompressedField& file, double time) {
-  const auto& times = file.times();
-  const auto pos = std::find(times.begin(), times.end(), time);
-  return pos == times.end() ? -1 : static_cast<std::int64_t>(pos - times.begin());
-}
-
 // `dir`/name.pnbf, or the .partial of a run that died.
 std::shared_ptr<compression::CompressedField> open_axis(const std::string& dir, const std::string& name) {
   const std::string whole = dir + "/" + name + ".pnbf", partial = whole + ".partial";
@@ -67,16 +60,14 @@ void CoordinateHistory::open_epoch(const std::string& dir) {
 }
 
 std::int64_t CoordinateHistory::exact_index(double time) const {
-  if (!m_exact) return -1;
-  const auto& times = m_exact->times();
-  const auto pos = std::find(times.begin(), times.end(), time);
-  return pos == times.end() ? -1 : static_cast<std::int64_t>(pos - times.begin());
+  return m_exact ? index_of_time(m_exact->times(), time) : -1;
 }
 
 std::pair<int, std::int64_t> CoordinateHistory::epoch_step(double time) const {
   for (std::size_t e = 0; e < m_epochs.size(); ++e) {
-    const std::int64_t step = step_at(*m_epochs[e].axes[0], time);
-    if (step >= 0 && step_at(*m_epochs[e].axes[1], time) == step && step_at(*m_epochs[e].axes[2], time) == step)
+    const auto& axes = m_epochs[e].axes;
+    const std::int64_t step = index_of_time(axes[0]->times(), time);
+    if (step >= 0 && index_of_time(axes[1]->times(), time) == step && index_of_time(axes[2]->times(), time) == step)
       return {static_cast<int>(e), step};
   }
   return {-1, -1};

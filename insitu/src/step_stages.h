@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/step_stages.h -- what the stages of one step hand each other
 //
-// A step runs: gather (each field's values in double, its range, its normalised values:
-// Context::field_values) -> prepare (the mesh at publish time; each field's lighting:
-// Context::prepare_lighting) -> render (one RenderedView per camera and field, through
-// render::Renderer) -> composite (the view's pieces over the background: composite_view) ->
-// write (ImageWriter: PNG and database row; the database commit ends the step). Each stage takes
-// the previous one's output by value, so that a stage can run elsewhere: on another thread, or
-// across ranks, whose pieces the composite stage will merge.
+// A step runs: gather (each field's values in double, its range over the ranks, its normalised
+// values: Context::gather_field, normalize_field) -> prepare (the mesh at publish time; each
+// field's lighting: Context::prepare_lighting) -> render (one RenderedView per camera and field,
+// through render::Renderer) -> composite (the ranks' runs merged, then the view over the
+// background: Context::composite, composite_view) -> write (ImageWriter, on rank 0: PNG and
+// database row; the database commit ends the step). Each stage takes the previous one's output
+// by value, so that a stage can run elsewhere: on another thread, or across ranks.
 #pragma once
 #include <cstddef>
 #include <string>

@@ -2,6 +2,7 @@
 // insitu/src/steps_csv.cpp -- the store's step lists
 #include "steps_csv.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +27,11 @@ std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, c
     steps.emplace_back(cycle, time);
   }
   return steps;
+}
+
+std::int64_t index_of_time(const std::vector<double>& times, double time) {
+  const auto pos = std::find(times.begin(), times.end(), time);
+  return pos == times.end() ? -1 : static_cast<std::int64_t>(pos - times.begin());
 }
 
 void write_steps_csv(const std::string& path, const std::vector<std::pair<std::int64_t, double>>& steps) {

@@ -15,6 +15,10 @@ namespace penumbra::insitu {
 /// cycle and a finite time.
 std::vector<std::pair<std::int64_t, double>> parse_steps_csv(std::istream& in, const std::string& source);
 
+/// The index of `time` in `times` (a stored file's step times), or -1 when it has no step then:
+/// how a stored field, or a moving mesh's coordinates, is looked up at a step of the run.
+std::int64_t index_of_time(const std::vector<double>& times, double time);
+
 /// Writes `steps` to `path` in that form, whole, through a temporary file renamed into place, so
 /// that a reader never sees a half-written list. Throws Error(io_error) naming the file.
 void write_steps_csv(const std::string& path, const std::vector<std::pair<std::int64_t, double>>& steps);

@@ -92,22 +92,11 @@ std::size_t StoredRun::step_count() const { return m_impl->steps.size(); }
 double StoredRun::time(std::size_t step) const { return m_impl->steps.at(step).second; }
 std::int64_t StoredRun::cycle(std::size_t step) const { return m_impl->steps.at(step).first; }
 
-namespace {
-
-// The field's own step at the run's step `step`: a step whose values were refused (NaN) is
-// missing from that field's file. -1 if it has none.
-std::int64_t own_step(const compression::CompressedField& file, double time) {
-  const auto& times = file.times();
-  const auto pos = std::find(times.begin(), times.end(), time);
-  return pos == times.end() ? -1 : static_cast<std::int64_t>(pos - times.begin());
-}
-
-}  // namespace
 
 void StoredRun::start_at(std::size_t step) {
   if (step >= step_count()) return;
   for (auto& [name, f] : m_impl->fields) {
-    const std::int64_t own = own_step(*f.file, time(step));
+    const std::int64_t own = index_of_time(f.file->times(), time(step));
     if (own >= 0) f.pager->start_at(static_cast<std::uint64_t>(own));
   }
 }
@@ -118,7 +107,7 @@ void StoredRun::read_values(const std::string& field, std::size_t step, std::vec
   if (it == m_impl->fields.end()) throw Error(ErrorCode::invalid_argument, "stored run: no field '" + field + "'");
   require(step < step_count(), "stored run: step " + std::to_string(step) + " is beyond the " +
                                    std::to_string(step_count()) + " stored steps");
-  const std::int64_t own = own_step(*it->second.file, time(step));
+  const std::int64_t own = index_of_time(it->second.file->times(), time(step));
   if (own < 0)
     throw Error(ErrorCode::invalid_argument, "stored run: field '" + field + "' has no values at time " +
                                                  std::to_string(time(step)));
