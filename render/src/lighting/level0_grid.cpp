@@ -149,6 +149,16 @@ void Level0Grid::resample(const TetMesh& mesh, const std::vector<float>& scalars
   });
 }
 
+bool Level0Grid::combine(const std::function<void(std::vector<float>&, std::vector<Level0Mask>&)>& combine) {
+  const std::size_t n = m_mask.size();
+  std::vector<Level0Mask> before = m_mask;
+  combine(m_tau, m_mask);
+  if (m_tau.size() != n || m_mask.size() != n)
+    throw Error(ErrorCode::internal_error, "LightVolume::combine_level0: the combination resized the level-0 grid (" +
+                                               std::to_string(n) + " nodes)");
+  return m_mask != before;
+}
+
 Level0Grid::Cell Level0Grid::locate(const Vec3d& p) const {
   Cell c{};
   for (int a = 0; a < 3; ++a) {

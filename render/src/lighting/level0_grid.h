@@ -3,6 +3,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "extinction_table.h"
@@ -30,6 +31,10 @@ public:
 
   /// Extinction tau per node from the per-point scalars (NaN or outside: 0).
   void resample(const TetMesh& mesh, const std::vector<float>& scalars, const ExtinctionTable& table);
+  /// Lets `combine` replace the extinction and the mask (LightVolume::combine_level0); the nodes
+  /// of this grid's own tets keep their tets for the next resample. Returns whether the mask
+  /// changed. Throws Error(internal_error) when `combine` resizes either.
+  bool combine(const std::function<void(std::vector<float>&, std::vector<Level0Mask>&)>& combine);
 
   std::size_t size() const { return m_mask.size(); }
   std::size_t index(int i, int j, int k) const {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "cpu_light_solver.h"
 #include "device_light_solver.h"
@@ -52,6 +53,11 @@ void check_options(const LightVolumeOptions& o) {
     for (int a = 0; a < 3; ++a) ok = ok && std::isfinite(b.lo[a]) && std::isfinite(b.hi[a]) && b.lo[a] <= b.hi[a];
     require(ok, call + "occluders[" + std::to_string(i) + "] is empty or not finite; expected lo <= hi");
   }
+  const Bounds& b = o.level0_bounds;
+  bool finite = true;
+  for (int a = 0; a < 3; ++a) finite = finite && std::isfinite(b.lo[a]) && std::isfinite(b.hi[a]);
+  require(b.empty() || (finite && b.lo.y <= b.hi.y && b.lo.z <= b.hi.z),
+          call + "level0_bounds is not finite or has lo > hi on some axis; expected empty or finite lo <= hi");
 }
 
 void check_light(const Light& l, std::size_t i) {
@@ -81,14 +87,18 @@ struct LightVolume::Impl {
   // memory. Point i here is the caller's point point_order[i]; results are copied back to the
   // caller's order at the end of every update.
   std::vector<std::int32_t> point_order;
-  std::shared_ptr<const TetMesh> mesh;
   LightVolumeOptions opt;
+  // Its bounds span opt.level0_bounds too: the level-0 grid and the path lengths to the bounds
+  // (level1_solve.h) are then the same on every rank of a split mesh.
+  std::shared_ptr<const TetMesh> mesh;
   lighting::Level1Topology topology;
   lighting::Level0Grid grid;
   lighting::Level1Field field;
   std::vector<float> scalars;
   double step = 0;
   bool has_field = false, resample_pending = false;
+  // combine_level0 replaced the grid's extinction (and mask) since the solver last read them.
+  bool upload_pending = false, grid_upload_pending = false;
   std::unique_ptr<lighting::LightSolver> solver;
   std::vector<LightState> lights;
   lighting::LightCombination combination;
@@ -99,11 +109,13 @@ struct LightVolume::Impl {
   bool first_light_ready = false;
   // The last durations of the volume's own pieces (ms; < 0: never timed).
   double level0_ms = -1, order_ms = -1;
+  // The resampling combine_level0 did since the last update (reported as that update's).
+  double combine_resample_ms = 0;
 
   Impl(const TetMesh& caller_mesh, LightVolumeOptions options)
       : point_order(detail::morton_point_order(caller_mesh)),
-        mesh(std::make_shared<const TetMesh>(detail::with_points_in_order(caller_mesh, point_order))),
         opt(std::move(options)),
+        mesh(in_solve_order(caller_mesh)),
         topology(*mesh),
         combination(mesh->points.size()) {
     lighting::CpuLightSolver* cpu = make_solver();
@@ -129,8 +141,16 @@ struct LightVolume::Impl {
   // level-0 grid follow the points. Every light then starts again from its level-0
   // solve, as a light that moved does, with its level-1 solution as the warm start
   // (LightState::take_level0); the recorded walks are forgotten and the start tets become hints.
+  std::shared_ptr<const TetMesh> in_solve_order(const TetMesh& caller_mesh) const {
+    TetMesh ordered = detail::with_points_in_order(caller_mesh, point_order);
+    if (!opt.level0_bounds.empty()) {
+      ordered.bounds.extend(opt.level0_bounds.lo);
+      ordered.bounds.extend(opt.level0_bounds.hi);
+    }
+    return std::make_shared<const TetMesh>(std::move(ordered));
+  }
   void move_to(const TetMesh& moved) {
-    mesh = std::make_shared<const TetMesh>(detail::with_points_in_order(moved, point_order));
+    mesh = in_solve_order(moved);
     topology.measure_edges(*mesh);
     solver->move_points(*mesh, topology, lighting::scatter_weights(*mesh, topology));
     build_grid();
@@ -197,13 +217,23 @@ struct LightVolume::Impl {
   }
 
   void resample_if_pending(LightSchedule& schedule, LightUpdateReport& report) {
-    if (!resample_pending) return;
-    report.resample_ms = lighting::timed_ms([&] {
-      grid.resample(*mesh, scalars, field.table);
+    if (!resample_pending && !upload_pending) return;
+    report.resample_ms += lighting::timed_ms([&] {
+      if (resample_pending) grid.resample(*mesh, scalars, field.table);
+      if (grid_upload_pending) solver->set_grid(grid);
       solver->set_field(grid, field);
     });
-    resample_pending = false;
+    resample_pending = upload_pending = grid_upload_pending = false;
     schedule.ran_piece(0);
+  }
+  void combine_level0(const LightVolume::Level0Combine& combine) {
+    const double ms = lighting::timed_ms([&] {
+      if (resample_pending) grid.resample(*mesh, scalars, field.table);
+      resample_pending = false;
+      if (grid.combine(combine)) grid_upload_pending = true;
+    });
+    upload_pending = true;
+    combine_resample_ms += ms;
   }
 
   // Level 0 interpolated at every mesh point, into at_vertex_scratch.
@@ -370,6 +400,13 @@ void LightVolume::set_field(const std::vector<float>& point_scalars, const Trans
   im.mark_all();
 }
 
+void LightVolume::combine_level0(const Level0Combine& combine) {
+  require(static_cast<bool>(combine), "LightVolume::combine_level0: combine is empty; expected a function");
+  if (!m_impl->has_field)
+    throw Error(ErrorCode::invalid_operation, "LightVolume::combine_level0: no field yet; call set_field first");
+  m_impl->combine_level0(combine);
+}
+
 void LightVolume::set_lights(std::vector<Light> lights) {
   Impl& im = *m_impl;
   for (std::size_t i = 0; i < lights.size(); ++i) check_light(lights[i], i);
@@ -418,6 +455,7 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
     throw Error(ErrorCode::invalid_operation, "LightVolume::update: no field yet; call set_field first");
   LightSchedule schedule(budget);
   LightUpdateReport report;
+  report.resample_ms = std::exchange(im.combine_resample_ms, 0.0);
   im.resample_if_pending(schedule, report);
   schedule.keep_for_end(im.combination.expected_publish_ms());
   for (LightState& l : im.lights)

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -93,6 +94,10 @@ struct LightVolumeOptions {
   /// Error(backend_unavailable) when the build has no GPU backend or the device lacks what the
   /// kernels need.
   std::shared_ptr<GpuDevice> device;
+  /// A volume over one rank's cells of a mesh split over ranks: level 0 spans these bounds (the
+  /// union of every rank's, the same on every rank) instead of the mesh's, so that the ranks'
+  /// grids share their nodes and LightVolume::combine_level0 can merge them. Empty: the mesh's.
+  Bounds level0_bounds;
 };
 
 /// What one update() may spend. A work unit is one level-0 solve of one light, one level-1 pass
@@ -160,6 +165,16 @@ public:
   /// Scattering strengths per channel: re-runs only the scattering.
   void set_scattering(std::array<double, 3> sigma_s);
 
+  /// The level-0 extinction and mask, as this volume's cells give them, merged with the other
+  /// ranks' (a volume over one rank's cells, options().level0_bounds): `combine` replaces both by
+  /// their element-wise maximum over the ranks, which is the whole mesh's grid, since a node lies
+  /// in some rank's cells exactly when it is inside and each rank gives it the same extinction.
+  /// Resamples first when set_field left that pending. Call it on every rank after set_field and
+  /// before update (collective whenever `combine` is); level-1 walks that leave this rank's cells
+  /// then continue in the merged level 0, and shadows cast by other ranks' cells are kept.
+  using Level0Combine = std::function<void(std::vector<float>& tau, std::vector<Level0Mask>& mask)>;
+  void combine_level0(const Level0Combine& combine);
+
   /// Algorithm 1, incremental: continues the solve within `budget`.
   LightUpdateReport update(const LightBudget& budget = {});
 
@@ -181,6 +196,13 @@ private:
   struct Impl;
   std::unique_ptr<Impl> m_impl;
 };
+
+/// Per listed point, whether the ray from it towards `light` runs into one of `mesh`'s tets (1)
+/// or leaves the mesh at the point (0); a ray in the plane of a tet's face counts as entering.
+/// Where ranks share a point, a rank whose cells the ray enters holds its level-1 value: its walk
+/// integrates the extinction there, where the others read level 0 at the point.
+std::vector<std::uint8_t> rays_enter_mesh(const TetMesh& mesh, const std::vector<std::int32_t>& points,
+                                          const Light& light);
 
 /// Double-precision ground truth for tests and benchmarks: the transmittance
 /// exp(-sigma_a * integral of tau) from point x to a light, found by intersecting the ray with
