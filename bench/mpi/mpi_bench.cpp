@@ -3,7 +3,7 @@
 // cut into slabs, METIS parts or cells dealt round-robin, against the scene rendered in one process
 //
 // Usage (under mpirun): pnb_bench_mpi --scene NAME --data-dir DIR [--frames N] [--sizes "512"]
-//        [--partitions "slabs metis round-robin"] [--lit "none phong"]
+//        [--partitions "slabs metis round-robin"] [--lit "none phong light-volume"]
 // Prints one JSON line per partition, lighting and image size, from rank 0:
 //   render_ms        median over ranks of each rank's median local ray casting with runs (CPU),
 //                    and render_ms_max, the slowest rank's
@@ -14,6 +14,10 @@
 //   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs
 //   rms_vs_serial_pct, max_level_diff   rank 0's composited image against the whole scene
 //                    rendered by one CPU ray caster in this process
+//   with lit "light-volume" also: light_ms (median over ranks) and light_ms_max, one rank's light
+//                    solve (level 0 merged over the ranks, its walks, its shared points settled),
+//                    light_ms_serial the whole scene's in one process, level0_merge_ms and
+//                    settle_ms (slowest rank), shared_points_max
 // With 2 cores, timings beyond 2 ranks measure oversubscription; bytes and runs do not.
 #include <mpi.h>
 
@@ -24,6 +28,7 @@
 #endif
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -36,7 +41,11 @@
 #include "penumbra/core/error.h"
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/image.h"
+#include "mpi_rank_group.h"
+#include "penumbra/render/light_volume.h"
+#include "rank_lighting.h"
 #include "run_compositing.h"
+#include "shared_points.h"
 #include "scene.h"
 #include "scene_views.h"
 
@@ -150,6 +159,68 @@ Stats over_ranks(double mine) {
   return {pb::median(all), *std::max_element(all.begin(), all.end())};
 }
 
+// The light volume's settings for lit "light-volume": one directional light, level 0 at 128
+// nodes, and sigma_a that halves the light at the median point (as the light benchmark picks it),
+// from exact optical depths at a fixed sample of points, found on rank 0.
+struct LightSetup {
+  pr::Light light{pr::Light::Kind::directional, {0.8, -0.45, -0.4}, {1, 1, 1}};
+  pr::LightVolumeOptions options;
+};
+
+LightSetup light_setup(const pb::Scene& scene, const std::shared_ptr<const pr::TetMesh>& whole, const pr::TransferFunction& tf) {
+  LightSetup s;
+  s.options.level0_resolution = 128;
+  double sigma_a = 1.0;
+  if (whole) {
+    const pr::LightTransmittanceReference reference(whole);
+    std::vector<double> depth;
+    const std::size_t step = std::max<std::size_t>(1, scene.point_count() / 2000);
+    for (std::size_t p = 0; p < scene.point_count(); p += step)
+      depth.push_back(reference.optical_depth(scene.scalars, tf, s.light, whole->points[p]));
+    const double median = pb::median(depth);
+    sigma_a = median > 0 ? std::log(2.0) / median : 1.0;
+  }
+  MPI_Bcast(&sigma_a, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  s.options.sigma_a = sigma_a;
+  return s;
+}
+
+// This rank's light per point, as a run over the ranks makes it: level 0 over the scene's
+// bounds merged over the ranks, the walks solved locally, the shared points settled.
+struct RankLight {
+  std::vector<float> rgb;
+  double solve_ms = 0;   ///< set_field, merge, update, settle
+  double merge_ms = 0;   ///< the level-0 reduction (MPI_Allreduce of extinction and mask)
+  double settle_ms = 0;  ///< finding the shared points and settling them
+  std::size_t shared_points = 0;
+};
+
+RankLight solve_light(penumbra::insitu::RankGroup& group, const std::shared_ptr<const pr::TetMesh>& mesh,
+                      const std::vector<float>& scalars, const pr::TransferFunction& tf, const LightSetup& setup,
+                      const penumbra::Bounds& bounds) {
+  RankLight out;
+  pr::LightVolumeOptions o = setup.options;
+  o.level0_bounds = bounds;
+  MPI_Barrier(MPI_COMM_WORLD);
+  pb::Stopwatch total;
+  pr::LightVolume lv(mesh, o);
+  lv.set_lights({setup.light});
+  lv.set_field(scalars, tf);
+  pb::Stopwatch merge;
+  lv.combine_level0(penumbra::insitu::level0_merge(group));
+  out.merge_ms = merge.ms();
+  lv.update();
+  pb::Stopwatch settle;
+  const penumbra::insitu::SharedPoints shared(group, *mesh, {setup.light});
+  const penumbra::insitu::SharedPoints::Rho rho{&lv.light_rho(0)};
+  out.rgb = lv.light_rgb();
+  shared.settle(group, group.exchange(shared.messages(group, rho)), rho, out.rgb);
+  out.settle_ms = settle.ms();
+  out.solve_ms = total.ms();
+  out.shared_points = shared.size();
+  return out;
+}
+
 int run(int argc, char** argv) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -170,18 +241,53 @@ int run(int argc, char** argv) {
     std::string s;
     if (in >> s) sizes.push_back(s);
   }
-  // The whole scene in one process, on rank 0: the reference picture of every line.
+  // The whole scene in one process, on rank 0: the reference picture of every line, and with
+  // the light volume, the reference light.
+  std::shared_ptr<const pr::TetMesh> whole_mesh;
   std::unique_ptr<pr::CpuRayCaster> whole;
-  if (rank == 0) whole = std::make_unique<pr::CpuRayCaster>(prepare(scene.points, scene.tets));
+  if (rank == 0) {
+    whole_mesh = prepare(scene.points, scene.tets);
+    whole = std::make_unique<pr::CpuRayCaster>(whole_mesh);
+  }
+  const bool light_volume = std::find(lits.begin(), lits.end(), "light-volume") != lits.end();
+  LightSetup setup;
+  std::vector<float> whole_light;
+  double whole_light_ms = 0;
+  penumbra::insitu::MpiRankGroup group(MPI_COMM_WORLD);
+  penumbra::Bounds bounds;
+  for (std::size_t p = 0; p < scene.point_count(); ++p)
+    bounds.extend({scene.points[3 * p], scene.points[3 * p + 1], scene.points[3 * p + 2]});
+  if (light_volume) {
+    setup = light_setup(scene, whole_mesh, tf);
+    if (rank == 0) {
+      pb::Stopwatch t;
+      pr::LightVolume lv(whole_mesh, setup.options);
+      lv.set_lights({setup.light});
+      lv.set_field(scene.scalars, tf);
+      lv.update();
+      whole_light = lv.light_rgb();
+      whole_light_ms = t.ms();
+    }
+  }
   for (std::string partition; partitions >> partition;) {
     const Part part = part_of(scene, owners(scene, partition, rank, ranks), rank);
-    pr::CpuRayCaster caster(prepare(part.xyz, part.tets));
+    const auto mesh = prepare(part.xyz, part.tets);
+    pr::CpuRayCaster caster(mesh);
+    RankLight light;
+    if (light_volume) light = solve_light(group, mesh, part.scalars, tf, setup, bounds);
     for (const std::string& size : sizes)
       for (const std::string& lit : lits) {
         const int side = std::stoi(size);
         const pr::Camera camera = pb::camera(scene, side, side);
-        pr::RenderOptions options;
+        pr::RenderOptions options, whole_options;
         if (lit == "phong") options.shading.model = pr::LightingModel::phong;
+        if (lit == "light-volume") {
+          options.shading.model = pr::LightingModel::light_volume;
+          options.shading.light_direction = -normalize(setup.light.vector);
+          options.shading.light_rgb = &light.rgb;
+        }
+        whole_options = options;
+        if (lit == "light-volume") whole_options.shading.light_rgb = &whole_light;
         pr::RenderOptions with_runs = options;
         with_runs.ray_runs = true;
         std::vector<double> render, composite;
@@ -203,8 +309,10 @@ int run(int argc, char** argv) {
         const Stats render_s = over_ranks(pb::median(render)), composite_s = over_ranks(pb::median(composite));
         const Stats bytes = over_ranks(exchanged_bytes(out.runs, side, side, rank, ranks));
         const Stats runs_mb = over_ranks(runs_here * sizeof(pr::RayRun) / (1 << 20));
+        const Stats light_s = over_ranks(light.solve_ms), merge_s = over_ranks(light.merge_ms),
+                    settle_s = over_ranks(light.settle_ms), shared_s = over_ranks(static_cast<double>(light.shared_points));
         if (rank != 0) continue;
-        const auto serial = pr::to_rgb8(whole->render(scene.scalars, tf, camera, options), scene.background);
+        const auto serial = pr::to_rgb8(whole->render(scene.scalars, tf, camera, whole_options), scene.background);
         const pb::ImageError e = pb::compare_rgb8(pr::to_rgb8(image, scene.background), serial);
         nlohmann::ordered_json line;
         line["bench"] = "mpi";
@@ -223,6 +331,14 @@ int run(int argc, char** argv) {
         line["runs_mb_max"] = pb::rounded(runs_mb.max, 1);
         line["rms_vs_serial_pct"] = pb::rounded(e.rms_pct, 4);
         line["max_level_diff"] = e.max_abs;
+        if (lit == "light-volume") {
+          line["light_ms"] = pb::rounded(light_s.median, 1);
+          line["light_ms_max"] = pb::rounded(light_s.max, 1);
+          line["light_ms_serial"] = pb::rounded(whole_light_ms, 1);
+          line["level0_merge_ms"] = pb::rounded(merge_s.max, 1);
+          line["settle_ms"] = pb::rounded(settle_s.max, 1);
+          line["shared_points_max"] = shared_s.max;
+        }
         line["frames"] = frames;
         line["load_avg"] = pb::load_average();
         std::cout << line.dump() << std::endl;

@@ -28,6 +28,8 @@
 #include "penumbra/render/gpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
+#include "rank_lighting.h"
+#include "shared_points.h"
 #include "penumbra/render/tet_mesh.h"
 
 namespace penumbra::insitu {
@@ -171,8 +173,11 @@ void check_rank_rules(const Config& c) {
     throw Error(ErrorCode::invalid_argument, "config: " + what + " is not available in a run over several ranks yet");
   };
   if (c.store) refuse("\"store\"");
-  if (c.lighting && (c.lighting->occlusion_model || c.lighting->model == render::LightingModel::light_volume))
-    refuse("lighting model \"" + lighting_label(*c.lighting) + "\"");
+  if (c.lighting && c.lighting->occlusion_model) refuse("lighting model \"" + lighting_label(*c.lighting) + "\"");
+  // The scattering's iterations would need the neighbouring ranks' light at every iteration.
+  if (c.lighting && c.lighting->model == render::LightingModel::light_volume)
+    for (double s : c.lighting->scattering)
+      if (s > 0) refuse("lighting \"scattering\" > 0 with model \"light-volume\"");
 }
 
 }  // namespace
@@ -208,6 +213,10 @@ struct Context::PreparedMesh {
   /// Per config field entry, its light volume (model light-volume), made at the first step and
   /// kept across steps so that each step's light starts from the previous one.
   std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
+  /// Over several ranks: the points this rank shares with others (made at the first lit step),
+  /// and per field entry its light with the shared points settled (SharedPoints).
+  std::unique_ptr<SharedPoints> shared_points;
+  std::vector<std::vector<float>> settled_light;
   /// Likewise for lighting model "occlusion".
   std::vector<std::unique_ptr<render::OcclusionLighting>> occlusions;
 };
@@ -338,6 +347,11 @@ void Context::prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::T
 void Context::move_geometry(std::shared_ptr<const render::TetMesh> tets) {
   PreparedMesh& p = *m_mesh;
   p.renderer->move_points(tets);
+  if (m_group->size() > 1) {
+    // Level 0 spans the ranks' bounds, which move with the points: the volumes are made again.
+    p.light_volumes.clear();
+    p.shared_points.reset();
+  }
   for (auto& lv : p.light_volumes)
     if (lv) lv->move_points(tets);
   p.occlusions.clear();  // made again for the moved mesh at the next step
@@ -471,6 +485,8 @@ render::LightVolume& Context::light_volume_of(std::size_t index) {
     lo.sigma_s = l.scattering;
     // With the gpu backend the light is solved on the same device as the rendering.
     if (m_mesh->on_gpu) lo.device = process_gpu_device(false);
+    // Over several ranks, level 0 spans them all, so that their grids merge (rank_lighting.h).
+    if (m_group->size() > 1) lo.level0_bounds = m_mesh->global_bounds;
     lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
     lv->set_lights(l.lights);
   }
@@ -484,16 +500,43 @@ render::RenderOptions Context::prepare_lighting(std::size_t index, const StepFie
   const std::vector<float>* light_rgb = nullptr;
   const auto t0 = Clock::now();
   if (l.occlusion_model) {
-    occlusion_of(index).set_field(step.normalized, tf);
+    agreed("pnb_execute", [&] { occlusion_of(index).set_field(step.normalized, tf); });
   } else if (l.model == render::LightingModel::light_volume) {
-    render::LightVolume& lv = light_volume_of(index);
-    lv.set_field(step.normalized, tf);
-    m_last_step.light = lv.update(l.budget);
-    light_rgb = &lv.light_rgb();
+    light_rgb = &solve_light_volume(index, step, tf);
   }
   m_last_step.light_ms += ms_since(t0);
   options.shading = shading_of(l, light_rgb);
   return options;
+}
+
+// Each collective step runs between agreed phases, which every rank passes or none does.
+const std::vector<float>& Context::solve_light_volume(std::size_t index, const StepField& step,
+                                                      const render::TransferFunction& tf) {
+  render::LightVolume* lv = nullptr;
+  agreed("pnb_execute", [&] {
+    lv = &light_volume_of(index);
+    lv->set_field(step.normalized, tf);
+  });
+  if (m_group->size() > 1) lv->combine_level0(level0_merge(*m_group));
+  agreed("pnb_execute", [&] { m_last_step.light = lv->update(m_config.lighting->budget); });
+  return m_group->size() > 1 ? settle_shared_points(index, *lv) : lv->light_rgb();
+}
+
+const std::vector<float>& Context::settle_shared_points(std::size_t index, const render::LightVolume& lv) {
+  PreparedMesh& p = *m_mesh;
+  if (!p.shared_points) p.shared_points = std::make_unique<SharedPoints>(*m_group, *p.tets, m_config.lighting->lights);
+  if (p.settled_light.size() < m_config.fields.size()) p.settled_light.resize(m_config.fields.size());
+  std::vector<float>& rgb = p.settled_light[index];
+  SharedPoints::Rho rho;
+  std::vector<std::vector<double>> to_each;
+  agreed("pnb_execute", [&] {
+    for (std::size_t k = 0; k < m_config.lighting->lights.size(); ++k) rho.push_back(&lv.light_rho(k));
+    to_each = p.shared_points->messages(*m_group, rho);
+    rgb = lv.light_rgb();
+  });
+  const auto from_each = m_group->exchange(to_each);
+  agreed("pnb_execute", [&] { p.shared_points->settle(*m_group, from_each, rho, rgb); });
+  return rgb;
 }
 
 std::vector<RenderedView> Context::render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
@@ -548,7 +591,8 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, S
   const FieldConfig& f = m_config.fields[index];
   const render::TransferFunction tf = resolve_transfer_function(f, step->lo, step->hi, m_mesh->global_bounds.diagonal());
   std::vector<RenderedView> views;
-  agreed("pnb_execute", [&] { views = render_views(index, *step, tf, prepare_lighting(index, *step, tf), render_ms); });
+  const render::RenderOptions options = prepare_lighting(index, *step, tf);
+  agreed("pnb_execute", [&] { views = render_views(index, *step, tf, options, render_ms); });
   for (RenderedView& view : views) {
     const std::optional<ComposedImage> image = composite(std::move(view));
     if (image && m_writer) rows.push_back(m_writer->write(*image, labels_of(*image, time, cycle)));

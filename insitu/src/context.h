@@ -158,6 +158,11 @@ private:
   /// Prepare stage: the field's lighting for this step (light volume updated within its budget,
   /// occlusion volume set), as the options every camera renders with.
   render::RenderOptions prepare_lighting(std::size_t index, const StepField& step, const render::TransferFunction& tf);
+  /// The field's light volume updated for this step (over several ranks, level 0 merged across
+  /// them first): its light per point.
+  const std::vector<float>& solve_light_volume(std::size_t index, const StepField& step, const render::TransferFunction& tf);
+  /// The light with the points shared with other ranks settled (collective; SharedPoints).
+  const std::vector<float>& settle_shared_points(std::size_t index, const render::LightVolume& lv);
   /// Render stage: the field from every camera.
   std::vector<RenderedView> render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
                                          render::RenderOptions options, double& render_ms);

@@ -16,6 +16,10 @@ public:
     return {Failure{0, code, message}};
   }
   void minimum(double*, int) override {}
+  void maximum(float*, std::size_t) override {}
+  void maximum(std::uint8_t*, std::size_t) override {}
+  std::vector<double> all_gather(const std::vector<double>& mine) override { return mine; }
+  std::vector<std::vector<double>> exchange(const std::vector<std::vector<double>>& to_each) override { return to_each; }
   render::Image composite(const render::RayRuns&, int width, int height) override {
     // A serial run composites whole views itself (composite_view); runs are never asked for.
     return render::Image(width, height);

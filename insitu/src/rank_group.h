@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/rank_group.h -- the processes one run spans: one (serial) or an MPI communicator's
 #pragma once
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "penumbra/core/vec3.h"
 #include "penumbra/render/image.h"
@@ -28,6 +31,14 @@ public:
   virtual std::vector<Failure> failures(int code, const std::string& message) = 0;
   /// Element-wise minimum of `values` over the ranks, in place.
   virtual void minimum(double* values, int count) = 0;
+  /// Element-wise maximum over the ranks, in place (`count` the same on every rank).
+  virtual void maximum(float* values, std::size_t count) = 0;
+  virtual void maximum(std::uint8_t* values, std::size_t count) = 0;
+  /// Every rank's `mine`, rank after rank (the same size on every rank).
+  virtual std::vector<double> all_gather(const std::vector<double>& mine) = 0;
+  /// Sends `to_each[r]` to rank r (size() entries) and returns what each rank sent this one,
+  /// indexed by the sender.
+  virtual std::vector<std::vector<double>> exchange(const std::vector<std::vector<double>>& to_each) = 0;
   /// The ranks' runs of one view merged: every pixel's runs in depth order, composited front to
   /// back ("over"). Returns the whole image on rank 0 and an empty one elsewhere.
   virtual render::Image composite(const render::RayRuns& runs, int width, int height) = 0;

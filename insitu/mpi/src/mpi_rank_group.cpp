@@ -2,6 +2,8 @@
 // insitu/mpi/src/mpi_rank_group.cpp -- agreements and reductions over an MPI communicator
 #include "mpi_rank_group.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -62,6 +64,76 @@ std::vector<RankGroup::Failure> MpiRankGroup::failures(int code, const std::stri
 
 void MpiRankGroup::minimum(double* values, int count) {
   check_mpi(MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_MIN, m_comm), "MPI_Allreduce");
+}
+
+namespace {
+
+// MPI counts are ints: long arrays are reduced in pieces.
+constexpr std::size_t kPiece = std::size_t{1} << 30;
+
+void allreduce_max(MPI_Comm comm, void* values, std::size_t count, MPI_Datatype type, std::size_t size) {
+  auto* bytes = static_cast<unsigned char*>(values);
+  for (std::size_t done = 0; done < count; done += kPiece) {
+    const int n = static_cast<int>(std::min(kPiece, count - done));
+    check_mpi(MPI_Allreduce(MPI_IN_PLACE, bytes + done * size, n, type, MPI_MAX, comm), "MPI_Allreduce (maximum)");
+  }
+}
+
+}  // namespace
+
+void MpiRankGroup::maximum(float* values, std::size_t count) {
+  allreduce_max(m_comm, values, count, MPI_FLOAT, sizeof(float));
+}
+
+void MpiRankGroup::maximum(std::uint8_t* values, std::size_t count) {
+  allreduce_max(m_comm, values, count, MPI_UINT8_T, 1);
+}
+
+std::vector<double> MpiRankGroup::all_gather(const std::vector<double>& mine) {
+  std::vector<double> all(mine.size() * static_cast<std::size_t>(m_size));
+  check_mpi(MPI_Allgather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()),
+                          MPI_DOUBLE, m_comm),
+            "MPI_Allgather");
+  return all;
+}
+
+std::vector<std::vector<double>> MpiRankGroup::exchange(const std::vector<std::vector<double>>& to_each) {
+  const auto ranks = static_cast<std::size_t>(m_size);
+  if (to_each.size() != ranks)
+    throw Error(ErrorCode::internal_error, "RankGroup::exchange: " + std::to_string(to_each.size()) + " messages for " +
+                                               std::to_string(ranks) + " ranks");
+  std::size_t sending = 0;
+  for (const auto& m : to_each) sending += m.size();
+  // Agreed before any exchange, so that a rank over MPI's int counts stops every rank, not itself.
+  int oversize = sending > static_cast<std::size_t>(INT32_MAX) ? 1 : 0;
+  check_mpi(MPI_Allreduce(MPI_IN_PLACE, &oversize, 1, MPI_INT, MPI_MAX, m_comm), "MPI_Allreduce");
+  if (oversize != 0)
+    throw Error(ErrorCode::out_of_memory, "RankGroup::exchange: a rank has more than 2^31 values to send");
+  std::vector<int> send_counts(ranks), send_offsets(ranks), recv_counts(ranks), recv_offsets(ranks);
+  std::vector<double> sent;
+  sent.reserve(sending);
+  for (std::size_t r = 0; r < ranks; ++r) {
+    send_offsets[r] = static_cast<int>(sent.size());
+    send_counts[r] = static_cast<int>(to_each[r].size());
+    sent.insert(sent.end(), to_each[r].begin(), to_each[r].end());
+  }
+  check_mpi(MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, m_comm), "MPI_Alltoall of the counts");
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < ranks; ++r) total += static_cast<std::size_t>(recv_counts[r]);
+  oversize = total > static_cast<std::size_t>(INT32_MAX) ? 1 : 0;
+  check_mpi(MPI_Allreduce(MPI_IN_PLACE, &oversize, 1, MPI_INT, MPI_MAX, m_comm), "MPI_Allreduce");
+  if (oversize != 0)
+    throw Error(ErrorCode::out_of_memory, "RankGroup::exchange: a rank would receive more than 2^31 values");
+  for (std::size_t r = 0, at = 0; r < ranks; at += static_cast<std::size_t>(recv_counts[r]), ++r)
+    recv_offsets[r] = static_cast<int>(at);
+  std::vector<double> received(total);
+  check_mpi(MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_DOUBLE, received.data(),
+                          recv_counts.data(), recv_offsets.data(), MPI_DOUBLE, m_comm),
+            "MPI_Alltoallv");
+  std::vector<std::vector<double>> from_each(ranks);
+  for (std::size_t r = 0; r < ranks; ++r)
+    from_each[r].assign(received.begin() + recv_offsets[r], received.begin() + recv_offsets[r] + recv_counts[r]);
+  return from_each;
 }
 
 render::Image MpiRankGroup::composite(const render::RayRuns& runs, int width, int height) {

@@ -23,6 +23,10 @@ public:
   int size() const override { return m_size; }
   std::vector<Failure> failures(int code, const std::string& message) override;
   void minimum(double* values, int count) override;
+  void maximum(float* values, std::size_t count) override;
+  void maximum(std::uint8_t* values, std::size_t count) override;
+  std::vector<double> all_gather(const std::vector<double>& mine) override;
+  std::vector<std::vector<double>> exchange(const std::vector<std::vector<double>>& to_each) override;
   render::Image composite(const render::RayRuns& runs, int width, int height) override;
 
 private:
