@@ -436,8 +436,17 @@ StoreConfig parse_store(const json& j, const std::string& path) {
   return s;
 }
 
+void parse_compositing(const json& j, const std::string& path, Config& c) {
+  only_keys(j, path, {"runs_memory_mb"});
+  if (const json* m = find(j, "runs_memory_mb")) {
+    const double mb = number(*m, child(path, "runs_memory_mb"));
+    if (!(mb > 0 && mb <= 1 << 24)) fail(child(path, "runs_memory_mb"), "must be in (0, 16777216]");
+    c.runs_memory_bytes = static_cast<std::size_t>(mb * (1 << 20));
+  }
+}
+
 Config parse_document(const json& j) {
-  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store"});
+  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store", "compositing"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -464,6 +473,7 @@ Config parse_document(const json& j) {
   }
   if (const json* l = find(j, "lighting")) c.lighting = parse_lighting(*l, "lighting");
   if (const json* st = find(j, "store")) c.store = parse_store(*st, "store");
+  if (const json* cm = find(j, "compositing")) parse_compositing(*cm, "compositing", c);
   return c;
 }
 

@@ -114,6 +114,10 @@ struct Config {
   /// Present when the config has a "lighting" object: the database then gets a lighting column.
   std::optional<LightingConfig> lighting;
   std::optional<StoreConfig> store;
+  /// "compositing": {"runs_memory_mb"}: over several ranks, the most one rank's ray runs of one
+  /// view may take (RenderOptions::ray_runs_memory_bytes); a view that needs more fails on every
+  /// rank, naming the rank.
+  std::size_t runs_memory_bytes = std::size_t{2} << 30;
 
   /// True when `name` is rendered by at least one field entry.
   bool uses_field(const std::string& name) const;

@@ -562,6 +562,7 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
     view.camera = c;
     const auto t0 = Clock::now();
     options.ray_runs = m_group->size() > 1;  // the ranks' runs are merged by composite()
+    options.ray_runs_memory_bytes = m_config.runs_memory_bytes;
     m_mesh->renderer->render(step.normalized, tf, camera, options, view.output);
     render_ms += ms_since(t0);
   }

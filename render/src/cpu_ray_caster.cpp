@@ -234,7 +234,7 @@ struct CpuRayCaster::Impl {
                    PixelRuns* runs) const;
   // Renders a frame into `image` (sized), and each pixel's runs into `runs` when given.
   void render_frame(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
-                    const RenderOptions& options, Image& image, PixelRuns* runs) const;
+                    const RenderOptions& options, Image& image, PixelRuns* runs, detail::RunsBudget* budget) const;
 };
 
 CpuRayCaster::Impl::Impl(std::shared_ptr<const TetMesh> m) : mesh(std::move(m)) {
@@ -589,7 +589,7 @@ Image CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunc
                            const RenderOptions& options) const {
   detail::check_frame_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf, camera, options);
   Image image(camera.width, camera.height);
-  m_impl->render_frame(scalars, tf, camera, options, image, nullptr);
+  m_impl->render_frame(scalars, tf, camera, options, image, nullptr, nullptr);
   return image;
 }
 
@@ -598,14 +598,20 @@ void CpuRayCaster::render(const std::vector<float>& scalars, const TransferFunct
   detail::check_frame_inputs("CpuRayCaster::render", *m_impl->mesh, scalars, tf, camera, options);
   out.image = Image(camera.width, camera.height);
   out.runs = {};
-  if (!options.ray_runs) return m_impl->render_frame(scalars, tf, camera, options, out.image, nullptr);
-  PixelRuns runs(static_cast<std::size_t>(camera.width) * camera.height);
-  m_impl->render_frame(scalars, tf, camera, options, out.image, &runs);
+  if (!options.ray_runs) return m_impl->render_frame(scalars, tf, camera, options, out.image, nullptr, nullptr);
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+  detail::RunsBudget budget(options.ray_runs_memory_bytes, pixels);
+  budget.add(0);
+  budget.check("CpuRayCaster::render");  // the per-pixel lists alone
+  PixelRuns runs(pixels);
+  m_impl->render_frame(scalars, tf, camera, options, out.image, &runs, &budget);
+  budget.check("CpuRayCaster::render");
   out.runs = detail::flatten_runs(runs);
 }
 
 void CpuRayCaster::Impl::render_frame(const std::vector<float>& scalars, const TransferFunction& tf, const Camera& camera,
-                                      const RenderOptions& options, Image& image, PixelRuns* runs) const {
+                                      const RenderOptions& options, Image& image, PixelRuns* runs,
+                                      detail::RunsBudget* budget) const {
   const double opacity = options.early_termination_opacity;
   const double stop_transmittance = opacity >= 1.0 ? 0.0 : 1.0 - opacity;
   const TfTable table(tf);
@@ -637,11 +643,19 @@ void CpuRayCaster::Impl::render_frame(const std::vector<float>& scalars, const T
     for (std::size_t ti = begin; ti < end; ++ti) {
       const int x0 = static_cast<int>(ti % tiles_x) * tile, y0 = static_cast<int>(ti / tiles_x) * tile;
       const int x1 = std::min(x0 + tile, camera.width), y1 = std::min(y0 + tile, camera.height);
+      if (budget && !budget->add(0)) return;  // over the runs' budget: render() throws
+      const auto count_runs = [&] {
+        for (int y = y0; budget && y < y1; ++y) {
+          const std::size_t row = static_cast<std::size_t>(y) * camera.width;
+          budget->add(*runs, row + x0, row + x1);
+        }
+      };
       if (!screen.empty()) {
         if (shaded)
           render_tile<true>(fc, x0, y0, x1, y1, jobs, image, runs);
         else
           render_tile<false>(fc, x0, y0, x1, y1, jobs, image, runs);
+        count_runs();
         continue;
       }
       for (int y = y0; y < y1; ++y)
@@ -655,6 +669,7 @@ void CpuRayCaster::Impl::render_frame(const std::vector<float>& scalars, const T
                     runs ? &(*runs)[static_cast<std::size_t>(y) * camera.width + x] : nullptr);
           store_pixel(acc, image.pixel(x, y));
         }
+      count_runs();
     }
   });
 }

@@ -7,7 +7,8 @@
 //              solver's partitioner cuts them) | round-robin (cell c on rank c mod ranks: every ray
 //              enters every rank many times, the worst case)
 //   LIGHTING   none | phong | light-volume | scattering (a light volume that scatters: refused by
-//              every rank's pnb_create_mpi);  BACKEND cpu | gpu
+//              every rank's pnb_create_mpi) | tight-runs (the runs' memory bound set below what
+//              the views need: every rank's step fails naming a rank);  BACKEND cpu | gpu
 //   fail=RANK  that rank publishes a field of the wrong size at the first step: every rank's
 //              pnb_execute must fail naming it, and the next step must render.
 //   ghosts     each rank also publishes, as ghost cells (vtkGhostType), the cells of other ranks
@@ -234,6 +235,45 @@ int refused_scattering(const std::string& dir, const std::string& backend, int r
   return all ? 0 : 1;
 }
 
+// Runs over their memory bound ("compositing": {"runs_memory_mb"}): every rank's step fails with
+// an error that names a rank and the runs, and none is left waiting.
+int runs_over_budget(const std::string& dir, const std::string& backend, const Part& part, int rank) {
+  std::string c = config(dir, "none", backend, false);
+  c.insert(c.rfind('}'), R"(, "compositing": {"runs_memory_mb": 0.2})");
+  pnb_context ctx = nullptr;
+  int good = ok(nullptr, pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank) ? 1 : 0;
+  if (ctx) {
+    const OwnedMesh& mesh = part.mesh;
+    pnb_mesh_desc m = PNB_MESH_DESC_INIT;
+    m.points = mesh.xyz.data();
+    m.point_count = static_cast<int64_t>(mesh.point_count());
+    m.connectivity = mesh.connectivity.data();
+    m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
+    m.offsets = mesh.offsets.data();
+    m.cell_types = mesh.types.data();
+    m.cell_types_count = static_cast<int64_t>(mesh.types.size());
+    m.topology_version = 1;
+    const auto values = penumbra::fixtures::sample(mesh, [](double x, double y, double z) { return field_at(x, y, z, 0); });
+    pnb_field_desc f = PNB_FIELD_DESC_INIT;
+    f.name = "T";
+    f.values = values.data();
+    f.count = static_cast<int64_t>(values.size());
+    const bool published = ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank) &&
+                           ok(ctx, pnb_publish_field(ctx, &f, PNB_BORROW), "pnb_publish_field", rank);
+    const pnb_status executed = pnb_execute(ctx, 0, 0);
+    const std::string text = pnb_last_error(ctx);
+    const bool refused = executed == PNB_OUT_OF_MEMORY && text.find("rank ") != std::string::npos &&
+                         text.find("ray runs") != std::string::npos;
+    if (!refused) std::fprintf(stderr, "rank %d: expected the step to fail on the runs' bound, got %d: %s\n", rank, int(executed), text.c_str());
+    good = published && refused ? good : 0;
+    pnb_destroy(ctx);
+  }
+  int all = 0;
+  MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return all ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -257,6 +297,7 @@ int main(int argc, char** argv) {
   const bool fail = fail_rank >= 0;
   const std::string dir = out + "/ranks", reference = out + "/serial";
   if (lighting == "scattering") return refused_scattering(dir, backend, rank);
+  if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
 

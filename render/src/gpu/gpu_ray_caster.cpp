@@ -299,7 +299,10 @@ void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunct
 
   Image& image = out.image;
   image = Image(camera.width, camera.height);
-  detail::PixelRuns runs(with_runs ? static_cast<std::size_t>(camera.width) * camera.height : 0);
+  const std::size_t pixels = with_runs ? static_cast<std::size_t>(camera.width) * camera.height : 0;
+  detail::RunsBudget budget(options.ray_runs_memory_bytes, pixels);
+  budget.check("GpuRayCaster::render");  // the per-pixel lists alone
+  detail::PixelRuns runs(pixels);
   std::vector<float> tile(static_cast<std::size_t>(tile_w) * tile_h * 4), tile_runs;
   for (int y0 = 0; y0 < camera.height; y0 += tile_h)
     for (int x0 = 0; x0 < camera.width; x0 += tile_w) {
@@ -314,7 +317,14 @@ void GpuRayCaster::render(const std::vector<float>& scalars, const TransferFunct
       for (int y = 0; y < h; ++y)
         std::memcpy(image.pixel(x0, y0 + y), &tile[static_cast<std::size_t>(y) * w * 4],
                     static_cast<std::size_t>(w) * 4 * sizeof(float));
-      if (with_runs) m.read_runs(gl, x0, y0, w, h, camera.width, tile_runs, runs);
+      if (with_runs) {
+        m.read_runs(gl, x0, y0, w, h, camera.width, tile_runs, runs);
+        for (int y = y0; y < y0 + h; ++y) {
+          const std::size_t row = static_cast<std::size_t>(y) * camera.width;
+          budget.add(runs, row + x0, row + x0 + w);
+        }
+        budget.check("GpuRayCaster::render");
+      }
     }
   gl.UseProgram(0);
   const GLenum err = gl.GetError();

@@ -25,6 +25,12 @@ struct RenderOptions {
   /// Also return each pixel's runs inside the mesh (RenderOutput::runs), for compositing with
   /// other pieces of the same scene (other ranks' partitions).
   bool ray_runs = false;
+  /// The most a frame's runs may take (bytes): each pixel's list while the frame renders and the
+  /// flattened RayRuns that follow, counted as 28 B per pixel and 48 B per run. A frame that
+  /// needs more stops and throws Error(out_of_memory) naming what it needed, so that a rank of a
+  /// run (cells dealt round-robin at a high resolution: tens of runs per pixel) fails clearly
+  /// instead of exhausting its node.
+  std::size_t ray_runs_memory_bytes = std::size_t{2} << 30;
 };
 
 /// One stretch of a ray inside the mesh, from where it enters to where it leaves: a ray that
