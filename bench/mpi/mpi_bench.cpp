@@ -3,7 +3,7 @@
 // cut into slabs, METIS parts or cells dealt round-robin, against the scene rendered in one process
 //
 // Usage (under mpirun): pnb_bench_mpi --scene NAME --data-dir DIR [--frames N] [--sizes "512"]
-//        [--partitions "slabs metis round-robin"] [--lit "none phong light-volume"]
+//        [--partitions "slabs metis round-robin"] [--lit "none phong light-volume"] [--runs-memory-mb N]
 // Prints one JSON line per partition, lighting and image size, from rank 0:
 //   render_ms        median over ranks of each rank's median local ray casting with runs (CPU),
 //                    and render_ms_max, the slowest rank's
@@ -11,7 +11,10 @@
 //                    order, the gather to rank 0), slowest rank
 //   bytes_per_rank   bytes each rank sends and receives in the exchange (runs 24 B, 8 B per pixel
 //                    that has runs; mean over ranks) and bytes_per_rank_max
-//   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs
+//   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs,
+//                    runs_peak_mb_max what they hold at their peak (28 B per pixel, 48 B per run:
+//                    the per-pixel lists and the flat copy), which --runs-memory-mb bounds (default
+//                    2048, the library's default): a frame over it prints a line with "refused"
 //   rms_vs_serial_pct, max_level_diff   rank 0's composited image against the whole scene
 //                    rendered by one CPU ray caster in this process
 //   with lit "light-volume" also: light_ms (median over ranks) and light_ms_max, one rank's light
@@ -221,6 +224,36 @@ RankLight solve_light(penumbra::insitu::RankGroup& group, const std::shared_ptr<
   return out;
 }
 
+// What a rank's runs of one frame hold at their peak, as RenderOptions::ray_runs_memory_bytes
+// counts it: each pixel's list while the frame renders, and the flat copy.
+double runs_peak_bytes(double pixels, double runs) { return pixels * 28.0 + runs * 48.0; }
+
+// Whether some rank's frame went over the runs' memory bound (collective): then rank 0 prints one
+// line naming the first such rank's error instead of timings.
+bool agreed_refusal(const std::string& error, int rank, const std::string& partition, const std::string& lit, int side) {
+  int mine = error.empty() ? -1 : rank, first = -1;
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  int key = mine < 0 ? ranks : mine;
+  MPI_Allreduce(&key, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (first == ranks) return false;
+  std::vector<char> text(4096, '\0');
+  if (rank == first) error.copy(text.data(), text.size() - 1);
+  MPI_Bcast(text.data(), static_cast<int>(text.size()), MPI_CHAR, first, MPI_COMM_WORLD);
+  if (rank == 0) {
+    nlohmann::ordered_json line;
+    line["bench"] = "mpi";
+    line["ranks"] = ranks;
+    line["partition"] = partition;
+    line["lit"] = lit;
+    line["width"] = side;
+    line["refused"] = true;
+    line["error"] = "rank " + std::to_string(first) + ": " + std::string(text.data());
+    std::cout << line.dump() << std::endl;
+  }
+  return true;
+}
+
 int run(int argc, char** argv) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -228,6 +261,7 @@ int run(int argc, char** argv) {
   const std::string name = pb::option(argc, argv, "scene", "holeblock-1m");
   const std::string data_dir = pb::option(argc, argv, "data-dir", "");
   const int frames = std::stoi(pb::option(argc, argv, "frames", "5"));
+  const std::size_t runs_memory_bytes = static_cast<std::size_t>(std::stod(pb::option(argc, argv, "runs-memory-mb", "2048")) * (1 << 20));
   penumbra::require(!data_dir.empty(), "pnb_bench_mpi: --data-dir DIR is required");
   const pb::Scene scene = pb::load_scene(name, data_dir);
   const pr::TransferFunction tf = pb::transfer_function(scene);
@@ -293,22 +327,34 @@ int run(int argc, char** argv) {
         std::vector<double> render, composite;
         pr::RenderOutput out;
         pr::Image image;
-        for (int f = 0; f < frames; ++f) {
+        with_runs.ray_runs_memory_bytes = runs_memory_bytes;
+        bool refused = false;
+        for (int f = 0; f < frames && !refused; ++f) {
           MPI_Barrier(MPI_COMM_WORLD);
           pb::Stopwatch r;
-          caster.render(part.scalars, tf, camera, with_runs, out);
+          std::string error;
+          try {
+            caster.render(part.scalars, tf, camera, with_runs, out);
+          } catch (const penumbra::Error& e) {
+            if (e.code() != penumbra::ErrorCode::out_of_memory) throw;
+            error = e.what();
+          }
           render.push_back(r.ms());
+          refused = agreed_refusal(error, rank, partition, lit, side);
+          if (refused) break;
           MPI_Barrier(MPI_COMM_WORLD);
           pb::Stopwatch c;
           image = penumbra::insitu::composite_runs(MPI_COMM_WORLD, out.runs, side, side);
           composite.push_back(c.ms());
         }
+        if (refused) continue;
         const double runs_here = static_cast<double>(out.runs.runs.size());
         double runs_total = 0;
         MPI_Reduce(&runs_here, &runs_total, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
         const Stats render_s = over_ranks(pb::median(render)), composite_s = over_ranks(pb::median(composite));
         const Stats bytes = over_ranks(exchanged_bytes(out.runs, side, side, rank, ranks));
         const Stats runs_mb = over_ranks(runs_here * sizeof(pr::RayRun) / (1 << 20));
+        const Stats runs_peak_mb = over_ranks(runs_peak_bytes(side * side, runs_here) / (1 << 20));
         const Stats light_s = over_ranks(light.solve_ms), merge_s = over_ranks(light.merge_ms),
                     settle_s = over_ranks(light.settle_ms), shared_s = over_ranks(static_cast<double>(light.shared_points));
         if (rank != 0) continue;
@@ -329,6 +375,7 @@ int run(int argc, char** argv) {
         line["bytes_per_rank_max"] = pb::rounded(bytes.max, 0);
         line["runs_per_pixel"] = pb::rounded(runs_total / (static_cast<double>(side) * side), 3);
         line["runs_mb_max"] = pb::rounded(runs_mb.max, 1);
+        line["runs_peak_mb_max"] = pb::rounded(runs_peak_mb.max, 1);
         line["rms_vs_serial_pct"] = pb::rounded(e.rms_pct, 4);
         line["max_level_diff"] = e.max_abs;
         if (lit == "light-volume") {
