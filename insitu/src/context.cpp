@@ -173,7 +173,10 @@ void check_rank_rules(const Config& c) {
     throw Error(ErrorCode::invalid_argument, "config: " + what + " is not available in a run over several ranks yet");
   };
   if (c.store) refuse("\"store\"");
-  if (c.lighting && c.lighting->occlusion_model) refuse("lighting model \"" + lighting_label(*c.lighting) + "\"");
+  // Image space starts a shadow gap at every ray sample; the ranks exchange only the points' gaps.
+  if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
+      c.lighting->occlusion.shadows && !c.lighting->lights.empty())
+    refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
   // The scattering's iterations would need the neighbouring ranks' light at every iteration.
   if (c.lighting && c.lighting->model == render::LightingModel::light_volume)
     for (double s : c.lighting->scattering)
@@ -467,9 +470,14 @@ std::unique_ptr<render::Renderer> Context::make_renderer(const std::shared_ptr<c
 render::OcclusionLighting& Context::occlusion_of(std::size_t index) {
   auto& occ = m_mesh->occlusions;
   if (occ.size() < m_config.fields.size()) occ.resize(m_config.fields.size());
-  if (!occ[index])  // cones traced on the GPU when it renders
-    occ[index] = std::make_unique<render::OcclusionLighting>(m_mesh->tets, m_config.lighting->occlusion, m_config.lighting->lights,
-                                                     m_mesh->on_gpu ? process_gpu_device(false) : nullptr);
+  if (!occ[index]) {
+    render::OcclusionSettings settings = m_config.lighting->occlusion;
+    // Over several ranks, the extinction grid spans them all, so that their grids merge.
+    if (m_group->size() > 1) settings.grid_bounds = m_mesh->global_bounds;
+    // Cones are traced on the GPU when it renders.
+    occ[index] = std::make_unique<render::OcclusionLighting>(m_mesh->tets, settings, m_config.lighting->lights,
+                                                             m_mesh->on_gpu ? process_gpu_device(false) : nullptr);
+  }
   return *occ[index];
 }
 
@@ -500,7 +508,7 @@ render::RenderOptions Context::prepare_lighting(std::size_t index, const StepFie
   const std::vector<float>* light_rgb = nullptr;
   const auto t0 = Clock::now();
   if (l.occlusion_model) {
-    agreed("pnb_execute", [&] { occlusion_of(index).set_field(step.normalized, tf); });
+    prepare_occlusion(index, step, tf);
   } else if (l.model == render::LightingModel::light_volume) {
     light_rgb = &solve_light_volume(index, step, tf);
   }
@@ -510,6 +518,35 @@ render::RenderOptions Context::prepare_lighting(std::size_t index, const StepFie
 }
 
 // Each collective step runs between agreed phases, which every rank passes or none does.
+void Context::prepare_occlusion(std::size_t index, const StepField& step, const render::TransferFunction& tf) {
+  render::OcclusionLighting* occ = nullptr;
+  agreed("pnb_execute", [&] {
+    occ = &occlusion_of(index);
+    occ->resample_field(step.normalized, tf);
+  });
+  if (m_group->size() > 1) {
+    occ->combine_extinction(extinction_merge(*m_group));
+    exchange_shadow_gaps(*occ);
+  }
+  agreed("pnb_execute", [&] { occ->finish_field(); });
+}
+
+void Context::exchange_shadow_gaps(render::OcclusionLighting& occ) {
+  const Bounds& b = m_mesh->tets->bounds;
+  const std::vector<double> boxes = m_group->all_gather({b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z});
+  std::vector<render::GapSegment> open;
+  GapRoutes routes;
+  agreed("pnb_execute", [&] {
+    open = occ.open_gaps();
+    routes = route_gaps(*m_group, boxes, open);
+  });
+  const auto asked = m_group->exchange(routes.requests);
+  std::vector<std::vector<double>> answers;
+  agreed("pnb_execute", [&] { answers = answer_gaps(occ, asked); });
+  const auto answered = m_group->exchange(answers);
+  agreed("pnb_execute", [&] { occ.add_gap_depths(sum_gap_answers(routes, answered, open.size())); });
+}
+
 const std::vector<float>& Context::solve_light_volume(std::size_t index, const StepField& step,
                                                       const render::TransferFunction& tf) {
   render::LightVolume* lv = nullptr;

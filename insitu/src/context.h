@@ -158,6 +158,12 @@ private:
   /// Prepare stage: the field's lighting for this step (light volume updated within its budget,
   /// occlusion volume set), as the options every camera renders with.
   render::RenderOptions prepare_lighting(std::size_t index, const StepField& step, const render::TransferFunction& tf);
+  /// The field's occlusion volume set for this step (over several ranks, the extinction grid
+  /// merged across them).
+  void prepare_occlusion(std::size_t index, const StepField& step, const render::TransferFunction& tf);
+  /// Over several ranks: the shadow gaps that leave this rank's cells integrated through the
+  /// others' (collective; rank_lighting.h).
+  void exchange_shadow_gaps(render::OcclusionLighting& occ);
   /// The field's light volume updated for this step (over several ranks, level 0 merged across
   /// them first): its light per point.
   const std::vector<float>& solve_light_volume(std::size_t index, const StepField& step, const render::TransferFunction& tf);

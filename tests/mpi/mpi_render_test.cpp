@@ -6,8 +6,9 @@
 //   PARTITION  slabs (cells by centroid x) | metis (METIS_PartMeshDual: non-convex parts, as a
 //              solver's partitioner cuts them) | round-robin (cell c on rank c mod ranks: every ray
 //              enters every rank many times, the worst case)
-//   LIGHTING   none | phong | light-volume | scattering (a light volume that scatters: refused by
-//              every rank's pnb_create_mpi) | tight-runs (the runs' memory bound set below what
+//   LIGHTING   none | phong | light-volume | occlusion (cone-traced, in space "points") |
+//              scattering, occlusion-image-refused (a light volume that scatters, image-space
+//              occlusion with shadows: refused by every rank's pnb_create_mpi) | tight-runs (the runs' memory bound set below what
 //              the views need: every rank's step fails naming a rank);  BACKEND cpu | gpu
 //   fail=RANK  that rank publishes a field of the wrong size at the first step: every rank's
 //              pnb_execute must fail naming it, and the next step must render.
@@ -124,6 +125,10 @@ std::string config(const std::string& dir, const std::string& lighting, const st
                                                      "opacities": [[0, 1], [1, 10]]}})" +
                   std::string(cell_field ? R"(, {"name": "C", "range": [0, 1]}])" : "]");
   if (lighting == "phong") c += R"(, "lighting": {"model": "phong"})";
+  if (lighting == "occlusion" || lighting == "occlusion-image")
+    c += R"(, "lighting": {"model": "occlusion", "occlusion": {"grid": 48, "space": ")" +
+         std::string(lighting == "occlusion" ? "points" : "image") + R"("},
+                           "lights": [{"type": "directional", "direction": [-0.6, 0.3, -1]}]})";
   if (lighting == "light-volume")
     c += R"(, "lighting": {"model": "light-volume", "level0_resolution": 48, "absorption": 1,
                            "lights": [{"type": "directional", "direction": [-0.6, 0.3, -1]}]})";
@@ -218,16 +223,18 @@ bool same_pictures(const std::string& dir, const std::string& reference, bool fa
   return good && compared > 0;
 }
 
-// A light volume that scatters is refused over several ranks (its iterations would need the
-// neighbours' light at every iteration): pnb_create_mpi fails on every rank, saying why.
-int refused_scattering(const std::string& dir, const std::string& backend, int rank) {
-  std::string c = config(dir, "light-volume", backend, false);
-  c.replace(c.find(R"("absorption": 1)"), 15, R"("absorption": 1, "scattering": [0.5, 0.5, 0.5])");
+// What a run over several ranks refuses at creation, with a message naming it: a light volume
+// that scatters (its iterations would need the neighbours' light at every iteration) and image-space
+// occlusion with shadows (its gaps start at every ray sample). pnb_create_mpi fails on every rank.
+int refused(const std::string& dir, const std::string& what, const std::string& backend, int rank) {
+  std::string c = config(dir, what == "scattering" ? "light-volume" : "occlusion-image", backend, false);
+  if (what == "scattering") c.replace(c.find(R"("absorption": 1)"), 15, R"("absorption": 1, "scattering": [0.5, 0.5, 0.5])");
+  const std::string expected = what == "scattering" ? "scattering" : "\"image\" with shadows";
   pnb_context ctx = nullptr;
   const pnb_status s = pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx);
   const std::string text = pnb_last_error(nullptr);
-  int good = s != PNB_OK && ctx == nullptr && text.find("scattering") != std::string::npos ? 1 : 0;
-  if (!good) std::fprintf(stderr, "rank %d: expected pnb_create_mpi to refuse scattering, got %d: %s\n", rank, int(s), text.c_str());
+  int good = s != PNB_OK && ctx == nullptr && text.find(expected) != std::string::npos ? 1 : 0;
+  if (!good) std::fprintf(stderr, "rank %d: expected pnb_create_mpi to refuse %s, got %d: %s\n", rank, what.c_str(), int(s), text.c_str());
   if (ctx) pnb_destroy(ctx);
   int all = 0;
   MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
@@ -296,10 +303,10 @@ int main(int argc, char** argv) {
   }
   const bool fail = fail_rank >= 0;
   const std::string dir = out + "/ranks", reference = out + "/serial";
-  if (lighting == "scattering") return refused_scattering(dir, backend, rank);
-  if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
+  if (lighting == "scattering" || lighting == "occlusion-image-refused") return refused(dir, lighting, backend, rank);
+  if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
 
   const OwnedMesh whole = penumbra::fixtures::tet_block_with_hole(8);
   int good = 1;

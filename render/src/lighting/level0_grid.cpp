@@ -70,9 +70,10 @@ std::array<int, 3> Level0Grid::choose_dims(const Bounds& bounds, int resolution,
                                                " cannot hold a level-0 grid; expected a larger budget");
 }
 
-Level0Grid::Level0Grid(const TetMesh& mesh, std::array<int, 3> dims, const std::vector<Bounds>& occluders)
-    : m_dims(dims), m_lo(mesh.bounds.lo) {
-  for (int a = 0; a < 3; ++a) m_h[a] = (mesh.bounds.hi[a] - mesh.bounds.lo[a]) / (dims[a] - 1);
+Level0Grid::Level0Grid(const TetMesh& mesh, const Bounds& bounds, std::array<int, 3> dims,
+                       const std::vector<Bounds>& occluders)
+    : m_dims(dims), m_lo(bounds.lo) {
+  for (int a = 0; a < 3; ++a) m_h[a] = (bounds.hi[a] - bounds.lo[a]) / (dims[a] - 1);
   const std::size_t n = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   m_node_tet.assign(n, -1);
   m_mask.assign(n, Level0Mask::outside);

@@ -25,9 +25,9 @@ public:
                                         std::size_t lights);
 
   Level0Grid() = default;
-  /// Locates every node in the mesh (rasterising each tet over the nodes in its box) and marks
-  /// occluder nodes.
-  Level0Grid(const TetMesh& mesh, std::array<int, 3> dims, const std::vector<Bounds>& occluders);
+  /// Nodes over `bounds` (a mesh's, or the union of every rank's); locates every node in the
+  /// mesh (rasterising each tet over the nodes in its box) and marks occluder nodes.
+  Level0Grid(const TetMesh& mesh, const Bounds& bounds, std::array<int, 3> dims, const std::vector<Bounds>& occluders);
 
   /// Extinction tau per node from the per-point scalars (NaN or outside: 0).
   void resample(const TetMesh& mesh, const std::vector<float>& scalars, const ExtinctionTable& table);

@@ -173,7 +173,7 @@ struct LightVolume::Impl {
   void build_grid() {
     const auto dims = lighting::Level0Grid::choose_dims(mesh->bounds, opt.level0_resolution,
                                                         opt.level0_memory_budget_bytes, std::max<std::size_t>(1, lights.size()));
-    grid = lighting::Level0Grid(*mesh, dims, opt.occluders);
+    grid = lighting::Level0Grid(*mesh, mesh->bounds, dims, opt.occluders);
     solver->set_grid(grid);
     step = opt.level1_step > 0 ? opt.level1_step : std::max(topology.mean_edge, grid.max_spacing());
     resample_pending = has_field;

@@ -32,14 +32,18 @@ struct ExtinctionResampler::Impl {
   lighting::Level0Grid grid;
 };
 
-ExtinctionResampler::ExtinctionResampler(std::shared_ptr<const TetMesh> mesh, int resolution)
+ExtinctionResampler::ExtinctionResampler(std::shared_ptr<const TetMesh> mesh, int resolution, const Bounds& span)
     : m_impl(std::make_unique<Impl>()) {
   require(mesh != nullptr, "ExtinctionResampler: mesh is null");
   require(resolution >= 2, "ExtinctionResampler: resolution = " + std::to_string(resolution) + "; expected >= 2");
   require(!mesh->tets.empty() && !mesh->bounds.empty(), "ExtinctionResampler: the mesh has no tets");
-  const auto dims =
-      lighting::Level0Grid::choose_dims(mesh->bounds, resolution, std::numeric_limits<std::size_t>::max() / 64, 0);
-  m_impl->grid = lighting::Level0Grid(*mesh, dims, {});
+  Bounds bounds = mesh->bounds;
+  if (!span.empty()) {
+    bounds.extend(span.lo);
+    bounds.extend(span.hi);
+  }
+  const auto dims = lighting::Level0Grid::choose_dims(bounds, resolution, std::numeric_limits<std::size_t>::max() / 64, 0);
+  m_impl->grid = lighting::Level0Grid(*mesh, bounds, dims, {});
   m_impl->mesh = std::move(mesh);
 }
 

@@ -45,8 +45,9 @@ void GapDepth::set_field(const std::vector<float>& point_scalars, const Transfer
   m_impl->bound = true;
 }
 
-double GapDepth::depth(const Vec3d& x, const Vec3d& direction, double length) const {
+double GapDepth::depth(const Vec3d& x, const Vec3d& direction, double length, double* covered) const {
   const double n = penumbra::length(direction);
+  if (covered) *covered = 0;
   if (!m_impl->bound || !(length > 0) || !(n > 0) || !std::isfinite(n)) return 0.0;
   const TetMesh& mesh = *m_impl->mesh;
   const detail::ClipLine line(x, direction / n);
@@ -57,6 +58,7 @@ double GapDepth::depth(const Vec3d& x, const Vec3d& direction, double length) co
     const double s0 = detail::scalar_in_tet(mesh, m_impl->scalars, t, line.o + line.d * lo);
     const double s1 = detail::scalar_in_tet(mesh, m_impl->scalars, t, line.o + line.d * hi);
     depth += m_impl->table.integral(s0, s1, hi - lo);
+    if (covered) *covered += hi - lo;
   });
   return depth;
 }

@@ -81,8 +81,10 @@ enum class PyramidQuantity {
 /// once per mesh, so a new field or transfer function only re-evaluates the nodes.
 class ExtinctionResampler {
 public:
-  /// Throws Error(invalid_argument) for resolution < 2 or a mesh without tets.
-  ExtinctionResampler(std::shared_ptr<const TetMesh> mesh, int resolution);
+  /// Nodes over the mesh's bounds and `span` (the union of every rank's, when the ranks' grids are
+  /// merged; empty: the mesh's alone). Throws Error(invalid_argument) for resolution < 2 or a
+  /// mesh without tets.
+  ExtinctionResampler(std::shared_ptr<const TetMesh> mesh, int resolution, const Bounds& span = {});
   ~ExtinctionResampler();
   ExtinctionResampler(ExtinctionResampler&&) noexcept;
   ExtinctionResampler& operator=(ExtinctionResampler&&) noexcept;
@@ -281,8 +283,9 @@ public:
   void set_field(const std::vector<float>& point_scalars, const TransferFunction& tf);
   /// Integral of tau over x + t u, t in [0, length], u = direction / |direction|; parts outside
   /// the mesh or in holes add nothing. 0 before set_field, for length <= 0 or a zero direction.
-  /// Thread-safe.
-  double depth(const Vec3d& x, const Vec3d& direction, double length) const;
+  /// `covered`, when given, receives the length of the segment inside the tets (less than
+  /// `length` where it leaves them: a hole, the boundary, or another rank's cells). Thread-safe.
+  double depth(const Vec3d& x, const Vec3d& direction, double length, double* covered = nullptr) const;
 
 private:
   struct Impl;

@@ -46,6 +46,17 @@ struct OcclusionSettings {
   int shadow_splits = 1;
   /// Pyramid level a cone section reads: continuous (default) or the thesis's whole levels.
   LevelSelection level = LevelSelection::continuous;
+  /// Over several ranks, each with its own cells: the extinction grid spans these bounds (the
+  /// union of every rank's, the same on every rank) so that the ranks' grids can be merged
+  /// (OcclusionLighting::combine_extinction). Empty: the mesh's bounds.
+  Bounds grid_bounds;
+};
+
+/// A shadow cone's first gap: the segment from a point towards a light that the cone skips and
+/// that is integrated exactly through the tets instead.
+struct GapSegment {
+  Vec3d start, direction;  ///< direction: any length > 0
+  double length = 0;
 };
 
 /// Per field: the extinction pyramid of the current step (rebuilt by set_field) and, per camera,
@@ -64,8 +75,28 @@ public:
   ~OcclusionLighting();
   OcclusionLighting(const OcclusionLighting&) = delete;
   OcclusionLighting& operator=(const OcclusionLighting&) = delete;
-  /// Resamples extinction through `tf`, rebuilds the pyramid and the shadow factors.
+  /// Resamples extinction through `tf`, rebuilds the pyramid and the shadow factors: the three
+  /// calls below in one.
   void set_field(const std::vector<float>& scalars, const TransferFunction& tf);
+  /// set_field in halves around the merge of the ranks' extinction grids, for a run over ranks:
+  /// resample_field (validates, resamples this rank's cells), combine_extinction (collective
+  /// whenever `combine` is: it replaces the grid by its element-wise maximum over the ranks, the
+  /// whole mesh's grid, so cones see every rank's cells), finish_field (the pyramid, the tracers,
+  /// the shadows). Shadow cones integrate their first gap through this rank's cells only.
+  void resample_field(const std::vector<float>& scalars, const TransferFunction& tf);
+  using ExtinctionCombine = std::function<void(std::vector<float>& tau)>;
+  void combine_extinction(const ExtinctionCombine& combine);
+  /// Over several ranks, between combine_extinction and finish_field: the shadow gaps that leave
+  /// this rank's cells, per light and point. Every rank integrates them through its own cells
+  /// (gap_depths) and add_gap_depths hands back the sums, so each gap is integrated through the
+  /// whole mesh: the transmittance factors over disjoint cells. (Image space, whose gaps start at
+  /// every ray sample, integrates them through this rank's cells alone: none are listed.)
+  std::vector<GapSegment> open_gaps();
+  /// The optical depth of each segment through this mesh's tets (0 without shadows). Thread-safe.
+  std::vector<double> gap_depths(const std::vector<GapSegment>& segments) const;
+  /// Per open_gaps() entry, the depth the other ranks' cells add to it.
+  void add_gap_depths(const std::vector<double>& depths);
+  void finish_field();
   /// The light field (3 floats per point) seen from `eye`.
   const std::vector<float>& light_rgb(const Vec3d& eye);
   /// Image space: the same light evaluated at any point x (every sample of every ray), seen
