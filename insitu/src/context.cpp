@@ -172,7 +172,6 @@ void check_rank_rules(const Config& c) {
   auto refuse = [](const std::string& what) {
     throw Error(ErrorCode::invalid_argument, "config: " + what + " is not available in a run over several ranks yet");
   };
-  if (c.store) refuse("\"store\"");
   // Image space starts a shadow gap at every ray sample; the ranks exchange only the points' gaps.
   if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
       c.lighting->occlusion.shadows && !c.lighting->lights.empty())
@@ -237,7 +236,7 @@ Context::Context(Config config, std::shared_ptr<RankGroup> group)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
   if (m_group->rank() == 0) m_writer = std::make_unique<ImageWriter>(m_config);
-  if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store);
+  if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
 }
 
 Context::~Context() = default;
@@ -265,7 +264,17 @@ void Context::publish_mesh(const MeshView& mesh) {
   if (!update.tets) update.tets = *m_mesh->tets;  // this rank's points stayed; the shared frame may not
   const Bounds global = global_bounds(*m_group, update.tets->bounds);
   update.tets->frame = LocalFrame::of(global);
-  agreed("pnb_publish_mesh", [&] { apply_mesh_update(mesh, std::move(update), global); });
+  const bool new_segment = store_segment_everywhere(update.kind == MeshUpdate::Kind::fresh);
+  agreed("pnb_publish_mesh", [&] { apply_mesh_update(mesh, std::move(update), global, new_segment); });
+}
+
+bool Context::store_segment_everywhere(bool fresh_here) {
+  if (!m_store || m_group->size() == 1) return false;
+  // min(not fresh) = 0 when some rank's topology is new; -max(segment) = min(-segment).
+  double v[2] = {fresh_here ? 0.0 : 1.0, -static_cast<double>(m_store->last_segment())};
+  m_group->minimum(v, 2);
+  m_store->continue_after(static_cast<int>(-v[1]));
+  return v[0] == 0;
 }
 
 namespace {
@@ -301,7 +310,7 @@ Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {
   return {Kind::moved, render::move_tet_mesh(*m_mesh->tets, mesh, "pnb_publish_mesh")};
 }
 
-void Context::apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global) {
+void Context::apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global, bool new_segment) {
   auto tets = std::make_shared<const render::TetMesh>(std::move(*update.tets));
   if (update.kind != MeshUpdate::Kind::same) log_if_tangled(*tets);
   if (update.kind == MeshUpdate::Kind::fresh) {
@@ -312,6 +321,8 @@ void Context::apply_mesh_update(const MeshView& mesh, MeshUpdate update, const B
       ++m_geometry_updates;
       if (m_store) m_store->points_moved();
     }
+    // Another rank's topology is new: every rank's part begins the next segment with it.
+    if (new_segment) m_store->begin_segment(mesh.ghost_cells ? without_ghosts(mesh).view : m_mesh->view);
   }
   m_mesh->global_bounds = global;
   m_mesh->cameras = view_cameras(m_config, global);

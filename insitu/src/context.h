@@ -126,7 +126,10 @@ private:
   MeshUpdate plan_mesh_update(const MeshView& mesh) const;
   /// Takes `update` (its frame set from the ranks' `global` bounds): a new preparation, or the
   /// geometry moved; the cameras from `global`.
-  void apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global);
+  void apply_mesh_update(const MeshView& mesh, MeshUpdate update, const Bounds& global, bool new_segment);
+  /// Over several ranks with a store: whether every rank begins a new segment with this mesh
+  /// (some rank's topology is new), and the segment numbers agreed (collective).
+  bool store_segment_everywhere(bool fresh_here);
   /// A new topology: the renderer, the owned connectivity; a new store segment; fields dropped.
   void prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::TetMesh> tets);
   /// The same topology at other positions (or in another frame): the renderer and the light

@@ -26,9 +26,23 @@ std::string file_stem(const std::string& name) {
   return s.empty() || s[0] == '.' ? "_" + s : s;
 }
 
+// The part count of a segment over several ranks, through a temporary file renamed into place.
+void write_part_count(const std::string& path, int parts) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << parts << "\n";
+    out.flush();
+    if (!out) throw Error(ErrorCode::io_error, "store: cannot write '" + tmp + "'");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(ErrorCode::io_error, "store: cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+}
+
 }  // namespace
 
-FieldStore::FieldStore(StoreConfig config) : m_config(std::move(config)) {
+FieldStore::FieldStore(StoreConfig config, int part, int parts) : m_config(std::move(config)), m_part(part), m_parts(parts) {
   std::error_code ec;
   std::filesystem::create_directories(m_config.directory, ec);
   if (ec || !std::filesystem::is_directory(m_config.directory))
@@ -61,9 +75,16 @@ void FieldStore::begin_segment(const MeshView& mesh) {
   char name[32];
   std::snprintf(name, sizeof name, "segment-%03d", m_segment);
   m_segment_dir = m_config.directory + "/" + name;
+  const std::string segment_dir = m_segment_dir;
+  if (m_parts > 1) {
+    char part[32];
+    std::snprintf(part, sizeof part, "/part-%05d", m_part);
+    m_segment_dir += part;
+  }
   std::error_code ec;
   std::filesystem::create_directories(m_segment_dir, ec);
   if (ec) throw Error(ErrorCode::io_error, "store: cannot create '" + m_segment_dir + "': " + ec.message());
+  if (m_parts > 1 && m_part == 0) write_part_count(segment_dir + "/parts.txt", m_parts);
   m_point_count = mesh.point_count();
   write_stored_mesh(m_segment_dir + "/mesh.pnbm", copy_mesh(mesh));
   write_steps();

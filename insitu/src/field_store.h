@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/field_store.h -- the run's compressed field history (config "store")
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -22,10 +23,17 @@ class CoordinateWriter;
 /// `<field>.pnbf` per field (`.partial` until finish) and `steps.csv` (cycle, time). A run that
 /// dies leaves every finished window readable (insitu::StoredRun). A segment whose points move
 /// (one topology) also holds their coordinates per recorded step (`coordinates/`, CoordinateWriter).
+///
+/// Over several ranks each rank keeps its own cells as one part: a segment is then
+/// `segment-NNN/part-RRRRR/`, each part laid out as a whole segment above, and part 0 writes
+/// `segment-NNN/parts.txt` (the part count), so that a reader knows a part that never began. All
+/// ranks begin their segments together, so one segment number means one stretch of the run.
 class FieldStore {
 public:
-  /// Creates the store directory; throws Error(io_error) when it cannot be created.
-  explicit FieldStore(StoreConfig config);
+  /// Creates the store directory; throws Error(io_error) when it cannot be created. The segments
+  /// already there (an earlier run, or the run before a restart) are kept: new ones are numbered
+  /// after them.
+  explicit FieldStore(StoreConfig config, int part = 0, int parts = 1);
   /// Finishes the files; errors are swallowed here (call finish() to see them).
   ~FieldStore();
   FieldStore(const FieldStore&) = delete;
@@ -33,6 +41,11 @@ public:
 
   /// Closes the current segment and starts the next one for `mesh`.
   void begin_segment(const MeshView& mesh);
+  /// The number of the last segment begun, or found in the directory when the store was opened
+  /// (-1: none); continue_after numbers the next one after `segment` (the ranks agree on the
+  /// highest any of them saw).
+  int last_segment() const { return m_segment; }
+  void continue_after(int segment) { m_segment = std::max(m_segment, segment); }
   /// Whether `cycle` is a recorded step (every_cycles).
   bool records(std::int64_t cycle) const;
   /// Adds one step of `field` (one value per mesh point), kept as float32 around a double offset
@@ -54,6 +67,7 @@ public:
 private:
   void write_steps();
   StoreConfig m_config;
+  int m_part = 0, m_parts = 1;
   int m_segment = -1;
   std::string m_segment_dir;
   std::uint64_t m_point_count = 0;

@@ -51,6 +51,12 @@ std::unique_ptr<StoredRun> StoredRun::open(const std::string& dir) {
     const bool partial = name.size() > 13 && name.compare(name.size() - 13, 13, ".pnbf.partial") == 0;
     const bool whole = name.size() > 5 && name.compare(name.size() - 5, 5, ".pnbf") == 0;
     if (!partial && !whole) continue;
+    // A run that died before its first window was written left the file empty: no step of it.
+    std::error_code ec;
+    if (partial && std::filesystem::file_size(e.path(), ec) == 0 && !ec) {
+      im.steps.clear();
+      continue;
+    }
     compression::OpenOptions oo;
     oo.recover_incomplete = partial;  // a run that died: its finished windows
     auto file = compression::CompressedField::open(e.path().string(), oo);
