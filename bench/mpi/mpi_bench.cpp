@@ -4,6 +4,7 @@
 //
 // Usage (under mpirun): pnb_bench_mpi --scene NAME --data-dir DIR [--frames N] [--sizes "512"]
 //        [--partitions "slabs metis round-robin"] [--lit "none phong light-volume"] [--runs-memory-mb N]
+//        [--write-parts DIR]
 // Prints one JSON line per partition, lighting and image size, from rank 0:
 //   render_ms        median over ranks of each rank's median local ray casting with runs (CPU),
 //                    and render_ms_max, the slowest rank's
@@ -22,6 +23,12 @@
 //                    light_ms_serial the whole scene's in one process, level0_merge_ms and
 //                    settle_ms (slowest rank), shared_points_max
 // With 2 cores, timings beyond 2 ranks measure oversubscription; bytes and runs do not.
+//
+// With --write-parts DIR it benchmarks nothing: for each partition, every rank writes its part as
+// DIR/PARTITION-N/piece-R.vtu (VTK XML, raw appended binary: float64 points, int64 tets, the
+// float32 point scalar "s") and rank 0 writes DIR/PARTITION-N.pvtu over the N pieces, DIR/scene.json
+// (the transfer function, camera and background) and DIR/serial-W.png, the one-process picture
+// (unlit) at each size; bench/mpi/pvbatch_peer.py renders those parts with ParaView.
 #include <mpi.h>
 
 #include <nlohmann/json.hpp>
@@ -32,7 +39,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <bit>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -162,6 +172,93 @@ Stats over_ranks(double mine) {
   return {pb::median(all), *std::max_element(all.begin(), all.end())};
 }
 
+// A part as a VTK XML unstructured grid whose arrays follow the header as raw appended blocks,
+// each a UInt64 byte count then the bytes: 1M tets read back in a fraction of a second.
+void write_vtu(const std::string& path, const Part& part) {
+  static_assert(std::endian::native == std::endian::little, "the pieces say LittleEndian");
+  const std::size_t np = part.scalars.size(), nc = part.tets.size() / 4;
+  std::vector<std::int64_t> offsets(nc);
+  for (std::size_t c = 0; c < nc; ++c) offsets[c] = static_cast<std::int64_t>(4 * (c + 1));
+  const std::vector<std::uint8_t> types(nc, 10);  // VTK_TETRA
+  struct Block {
+    const void* data;
+    std::uint64_t bytes;
+  };
+  const Block blocks[] = {{part.scalars.data(), np * sizeof(float)},
+                          {part.xyz.data(), 3 * np * sizeof(double)},
+                          {part.tets.data(), 4 * nc * sizeof(std::int64_t)},
+                          {offsets.data(), nc * sizeof(std::int64_t)},
+                          {types.data(), nc}};
+  std::uint64_t at[5], next = 0;
+  for (int b = 0; b < 5; ++b) at[b] = next, next += sizeof(std::uint64_t) + blocks[b].bytes;
+  std::ofstream out(path, std::ios::binary);
+  out << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+      << "<UnstructuredGrid>\n<Piece NumberOfPoints=\"" << np << "\" NumberOfCells=\"" << nc << "\">\n"
+      << "<PointData Scalars=\"s\"><DataArray type=\"Float32\" Name=\"s\" format=\"appended\" offset=\"" << at[0]
+      << "\"/></PointData>\n"
+      << "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" offset=\"" << at[1]
+      << "\"/></Points>\n<Cells>\n"
+      << "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"" << at[2] << "\"/>\n"
+      << "<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"" << at[3] << "\"/>\n"
+      << "<DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"" << at[4] << "\"/>\n"
+      << "</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
+  for (const Block& b : blocks) {
+    out.write(reinterpret_cast<const char*>(&b.bytes), sizeof(b.bytes));
+    out.write(static_cast<const char*>(b.data), static_cast<std::streamsize>(b.bytes));
+  }
+  out << "\n</AppendedData>\n</VTKFile>\n";
+  penumbra::require(static_cast<bool>(out), "pnb_bench_mpi: cannot write '" + path + "'");
+}
+
+// The pieces of one partition as one data set: piece R is read by rank R of as many ranks.
+void write_pvtu(const std::string& path, const std::string& piece_dir, int ranks) {
+  std::ofstream out(path);
+  out << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+      << "<PUnstructuredGrid GhostLevel=\"0\">\n"
+      << "<PPointData Scalars=\"s\"><PDataArray type=\"Float32\" Name=\"s\"/></PPointData>\n"
+      << "<PPoints><PDataArray type=\"Float64\" NumberOfComponents=\"3\"/></PPoints>\n";
+  for (int r = 0; r < ranks; ++r) out << "<Piece Source=\"" << piece_dir << "/piece-" << r << ".vtu\"/>\n";
+  out << "</PUnstructuredGrid>\n</VTKFile>\n";
+  penumbra::require(static_cast<bool>(out), "pnb_bench_mpi: cannot write '" + path + "'");
+}
+
+// What a peer needs to render the scene as this program does, and the picture to compare with.
+void write_scene(const std::string& dir, const pb::Scene& scene, const pr::TransferFunction& tf,
+                 const std::vector<std::string>& sizes) {
+  nlohmann::ordered_json j;
+  j["scene"] = scene.name;
+  j["tets"] = scene.tet_count();
+  j["tf"] = nlohmann::json::array();
+  for (const pb::TfNode& n : scene.tf) j["tf"].push_back({n.x, n.r, n.g, n.b, n.extinction});
+  const pb::SceneCamera& c = scene.camera;
+  j["camera"] = {{"eye", {c.eye.x, c.eye.y, c.eye.z}}, {"target", {c.target.x, c.target.y, c.target.z}},
+                 {"up", {c.up.x, c.up.y, c.up.z}}, {"fov_y_deg", c.fov_y_deg}};
+  j["background"] = {scene.background[0], scene.background[1], scene.background[2]};
+  std::ofstream(dir + "/scene.json") << j.dump() << "\n";
+  pr::CpuRayCaster whole(prepare(scene.points, scene.tets));
+  for (const std::string& size : sizes) {
+    const int side = std::stoi(size);
+    const pr::Image image = whole.render(scene.scalars, tf, pb::camera(scene, side, side), pr::RenderOptions{});
+    pr::write_png(dir + "/serial-" + size + ".png", pr::to_rgb8(image, scene.background), side, side);
+  }
+}
+
+void write_parts(const std::string& dir, const pb::Scene& scene, const pr::TransferFunction& tf,
+                 std::istringstream& partitions, const std::vector<std::string>& sizes, int rank, int ranks) {
+  for (std::string partition; partitions >> partition;) {
+    const std::string piece_dir = partition + "-" + std::to_string(ranks);
+    if (rank == 0) std::filesystem::create_directories(dir + "/" + piece_dir);
+    const std::vector<int> owner = owners(scene, partition, rank, ranks);
+    MPI_Barrier(MPI_COMM_WORLD);
+    write_vtu(dir + "/" + piece_dir + "/piece-" + std::to_string(rank) + ".vtu", part_of(scene, owner, rank));
+    if (rank == 0) write_pvtu(dir + "/" + piece_dir + ".pvtu", piece_dir, ranks);
+  }
+  if (rank == 0) write_scene(dir, scene, tf, sizes);
+  MPI_Barrier(MPI_COMM_WORLD);
+}
+
 // The light volume's settings for lit "light-volume": one directional light, level 0 at 128
 // nodes, and sigma_a that halves the light at the median point (as the light benchmark picks it),
 // from exact optical depths at a fixed sample of points, found on rank 0.
@@ -274,6 +371,11 @@ int run(int argc, char** argv) {
   for (std::istringstream in(pb::option(argc, argv, "sizes", "512")); in;) {
     std::string s;
     if (in >> s) sizes.push_back(s);
+  }
+  const std::string parts_dir = pb::option(argc, argv, "write-parts", "");
+  if (!parts_dir.empty()) {
+    write_parts(parts_dir, scene, tf, partitions, sizes, rank, ranks);
+    return 0;
   }
   // The whole scene in one process, on rank 0: the reference picture of every line, and with
   // the light volume, the reference light.

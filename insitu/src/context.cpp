@@ -29,6 +29,7 @@
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
 #include "rank_lighting.h"
+#include "rank_scattering.h"
 #include "shared_points.h"
 #include "penumbra/render/tet_mesh.h"
 
@@ -176,10 +177,6 @@ void check_rank_rules(const Config& c) {
   if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
       c.lighting->occlusion.shadows && !c.lighting->lights.empty())
     refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
-  // The scattering's iterations would need the neighbouring ranks' light at every iteration.
-  if (c.lighting && c.lighting->model == render::LightingModel::light_volume)
-    for (double s : c.lighting->scattering)
-      if (s > 0) refuse("lighting \"scattering\" > 0 with model \"light-volume\"");
 }
 
 }  // namespace
@@ -219,6 +216,10 @@ struct Context::PreparedMesh {
   /// and per field entry its light with the shared points settled (SharedPoints).
   std::unique_ptr<SharedPoints> shared_points;
   std::vector<std::vector<float>> settled_light;
+  /// Over several ranks with scattering: its solver over every rank's points, and per field entry
+  /// the scattered light (the next step's start).
+  std::unique_ptr<RankScattering> scattering;
+  std::vector<std::vector<float>> scattered_light;
   /// Likewise for lighting model "occlusion".
   std::vector<std::unique_ptr<render::OcclusionLighting>> occlusions;
 };
@@ -365,6 +366,7 @@ void Context::move_geometry(std::shared_ptr<const render::TetMesh> tets) {
     // Level 0 spans the ranks' bounds, which move with the points: the volumes are made again.
     p.light_volumes.clear();
     p.shared_points.reset();
+    p.scattering.reset();
   }
   for (auto& lv : p.light_volumes)
     if (lv) lv->move_points(tets);
@@ -505,7 +507,11 @@ render::LightVolume& Context::light_volume_of(std::size_t index) {
     // With the gpu backend the light is solved on the same device as the rendering.
     if (m_mesh->on_gpu) lo.device = process_gpu_device(false);
     // Over several ranks, level 0 spans them all, so that their grids merge (rank_lighting.h).
-    if (m_group->size() > 1) lo.level0_bounds = m_mesh->global_bounds;
+    // Over several ranks the scattering runs after the shared points are settled (RankScattering).
+    if (m_group->size() > 1) {
+      lo.level0_bounds = m_mesh->global_bounds;
+      lo.sigma_s = {0, 0, 0};
+    }
     lv = std::make_unique<render::LightVolume>(m_mesh->tets, lo);
     lv->set_lights(l.lights);
   }
@@ -584,7 +590,23 @@ const std::vector<float>& Context::settle_shared_points(std::size_t index, const
   });
   const auto from_each = m_group->exchange(to_each);
   agreed("pnb_execute", [&] { p.shared_points->settle(*m_group, from_each, rho, rgb); });
-  return rgb;
+  return scatter_over_ranks(index, rgb);
+}
+
+const std::vector<float>& Context::scatter_over_ranks(std::size_t index, const std::vector<float>& source) {
+  const LightingConfig& l = *m_config.lighting;
+  if (!(l.scattering[0] > 0 || l.scattering[1] > 0 || l.scattering[2] > 0)) return source;
+  PreparedMesh& p = *m_mesh;
+  const auto t0 = Clock::now();
+  if (!p.scattering) p.scattering = std::make_unique<RankScattering>(*m_group, *p.tets, *p.shared_points);
+  if (p.scattered_light.size() < m_config.fields.size()) p.scattered_light.resize(m_config.fields.size());
+  const render::LightVolumeOptions defaults;
+  const RankScattering::Report r = p.scattering->solve(*m_group, source, l.scattering, defaults.scatter_tolerance,
+                                                       defaults.scatter_max_iterations, p.scattered_light[index]);
+  m_last_step.light.scatter_iterations += r.iterations;
+  m_last_step.light.l1_scatter_ms += ms_since(t0);
+  if (!r.converged) m_last_step.light.converged = false;
+  return p.scattered_light[index];
 }
 
 std::vector<RenderedView> Context::render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,

@@ -172,6 +172,9 @@ private:
   const std::vector<float>& solve_light_volume(std::size_t index, const StepField& step, const render::TransferFunction& tf);
   /// The light with the points shared with other ranks settled (collective; SharedPoints).
   const std::vector<float>& settle_shared_points(std::size_t index, const render::LightVolume& lv);
+  /// Over several ranks with scattering: `source` scattered over every rank's points
+  /// (collective; RankScattering), else `source`.
+  const std::vector<float>& scatter_over_ranks(std::size_t index, const std::vector<float>& source);
   /// Render stage: the field from every camera.
   std::vector<RenderedView> render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
                                          render::RenderOptions options, double& render_ms);

@@ -144,4 +144,31 @@ void SharedPoints::settle(const RankGroup& group, const std::vector<std::vector<
   }
 }
 
+std::vector<double> SharedPoints::sum_over_holders(RankGroup& group, const std::vector<double>& by_slot,
+                                                   std::size_t width) const {
+  std::vector<std::vector<double>> to_each(static_cast<std::size_t>(group.size()));
+  for (const Peer& peer : m_peers) {
+    std::vector<double>& out = to_each[static_cast<std::size_t>(peer.rank)];
+    for (std::uint32_t s : peer.slots) out.insert(out.end(), by_slot.begin() + s * width, by_slot.begin() + (s + 1) * width);
+  }
+  const std::vector<std::vector<double>> from_each = group.exchange(to_each);
+  std::vector<double> sum(by_slot.size(), 0.0);
+  std::size_t next_peer = 0;
+  for (int r = 0; r < group.size(); ++r) {
+    if (r == group.rank()) {
+      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += by_slot[i];
+      continue;
+    }
+    if (next_peer == m_peers.size() || m_peers[next_peer].rank != r) continue;
+    const Peer& peer = m_peers[next_peer++];
+    const std::vector<double>& got = from_each[static_cast<std::size_t>(r)];
+    require(got.size() == peer.slots.size() * width, "SharedPoints: rank " + std::to_string(r) + " sent " +
+                                                         std::to_string(got.size()) + " values; expected " +
+                                                         std::to_string(peer.slots.size() * width));
+    for (std::size_t j = 0; j < peer.slots.size(); ++j)
+      for (std::size_t c = 0; c < width; ++c) sum[peer.slots[j] * width + c] += got[j * width + c];
+  }
+  return sum;
+}
+
 }  // namespace penumbra::insitu

@@ -40,11 +40,20 @@ public:
   void settle(const RankGroup& group, const std::vector<std::vector<double>>& from_each, const Rho& rho,
               std::vector<float>& rgb) const;
 
-private:
+  /// A rank this one shares points with, and those points as slots of points(), in the order
+  /// both ranks list them (their coordinates').
   struct Peer {
     int rank = 0;
-    std::vector<std::uint32_t> slots;  ///< into m_points, in coordinate order
+    std::vector<std::uint32_t> slots;
   };
+  /// This rank's shared points (by id), indexed by slot.
+  const std::vector<std::int32_t>& points() const { return m_points; }
+  const std::vector<Peer>& peer_list() const { return m_peers; }
+  /// Per slot, `width` values summed over every rank that holds the point, in rank order, so that
+  /// all of them get the same sum (collective).
+  std::vector<double> sum_over_holders(RankGroup& group, const std::vector<double>& by_slot, std::size_t width) const;
+
+private:
   std::vector<std::int32_t> m_points;  ///< this rank's shared points, by id
   /// Per light and slot: whether the ray towards the light enters this rank's cells.
   std::vector<std::vector<std::uint8_t>> m_enters;
