@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// tests/mpi/mpi_partition.h -- the test mesh cut the ways solvers cut theirs, and its field
+// tests/mpi/mpi_partition.h -- the test mesh cut the ways solvers cut theirs, its field, its descriptor
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -14,6 +14,7 @@
 #endif
 
 #include "fixtures/meshes.h"
+#include "penumbra/penumbra.h"
 
 namespace penumbra::mpi_test {
 
@@ -89,6 +90,20 @@ inline Part partition(const OwnedMesh& whole, const std::string& kind, int rank,
     part.mesh.types.push_back(whole.types[c]);
   }
   return part;
+}
+
+// `mesh` as the C API takes it (topology_version 1).
+inline pnb_mesh_desc mesh_desc(const OwnedMesh& mesh) {
+  pnb_mesh_desc m = PNB_MESH_DESC_INIT;
+  m.points = mesh.xyz.data();
+  m.point_count = static_cast<int64_t>(mesh.point_count());
+  m.connectivity = mesh.connectivity.data();
+  m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
+  m.offsets = mesh.offsets.data();
+  m.cell_types = mesh.types.data();
+  m.cell_types_count = static_cast<int64_t>(mesh.types.size());
+  m.topology_version = 1;
+  return m;
 }
 
 }  // namespace penumbra::mpi_test

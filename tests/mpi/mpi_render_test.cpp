@@ -74,15 +74,7 @@ bool ok(pnb_context ctx, pnb_status s, const char* what, int rank) {
 // Returns whether every call that should succeed did, and every call that should fail did.
 bool run(pnb_context ctx, const Part& part, int rank, bool fail, int fail_rank) {
   const OwnedMesh& mesh = part.mesh;
-  pnb_mesh_desc m = PNB_MESH_DESC_INIT;
-  m.points = mesh.xyz.data();
-  m.point_count = static_cast<int64_t>(mesh.point_count());
-  m.connectivity = mesh.connectivity.data();
-  m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
-  m.offsets = mesh.offsets.data();
-  m.cell_types = mesh.types.data();
-  m.cell_types_count = static_cast<int64_t>(mesh.types.size());
-  m.topology_version = 1;
+  pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
   m.cell_ghosts = part.ghosts.empty() ? nullptr : part.ghosts.data();
   if (!ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank)) return false;
   std::vector<double> cells(part.whole_cell.size());
@@ -177,15 +169,7 @@ int runs_over_budget(const std::string& dir, const std::string& backend, const P
   int good = ok(nullptr, pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank) ? 1 : 0;
   if (ctx) {
     const OwnedMesh& mesh = part.mesh;
-    pnb_mesh_desc m = PNB_MESH_DESC_INIT;
-    m.points = mesh.xyz.data();
-    m.point_count = static_cast<int64_t>(mesh.point_count());
-    m.connectivity = mesh.connectivity.data();
-    m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
-    m.offsets = mesh.offsets.data();
-    m.cell_types = mesh.types.data();
-    m.cell_types_count = static_cast<int64_t>(mesh.types.size());
-    m.topology_version = 1;
+    const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
     const auto values = penumbra::fixtures::sample(mesh, [](double x, double y, double z) { return field_at(x, y, z, 0); });
     pnb_field_desc f = PNB_FIELD_DESC_INIT;
     f.name = "T";

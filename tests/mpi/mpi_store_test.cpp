@@ -53,15 +53,7 @@ bool ok(pnb_context ctx, pnb_status s, const char* what) {
 
 // Publishes `mesh` and renders steps [first, last); `kill` aborts after step kill_step.
 bool run_steps(pnb_context ctx, const OwnedMesh& mesh, int first, int last, int kill_step) {
-  pnb_mesh_desc m = PNB_MESH_DESC_INIT;
-  m.points = mesh.xyz.data();
-  m.point_count = static_cast<int64_t>(mesh.point_count());
-  m.connectivity = mesh.connectivity.data();
-  m.connectivity_count = static_cast<int64_t>(mesh.connectivity.size());
-  m.offsets = mesh.offsets.data();
-  m.cell_types = mesh.types.data();
-  m.cell_types_count = static_cast<int64_t>(mesh.types.size());
-  m.topology_version = 1;
+  const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
   if (!ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh")) return false;
   for (int step = first; step < last; ++step) {
     const auto values = penumbra::fixtures::sample(mesh, [step](double x, double y, double z) { return field_at(x, y, z, step); });
