@@ -14,6 +14,7 @@ packages=(
   libzfp-dev libzstd-dev libfpzip-dev
   libopenmpi-dev openmpi-bin  # penumbra_mpi and its tests under mpirun
   libmetis-dev  # METIS partitions in the MPI tests
+  libcpp-httplib-dev  # penumbra-view (viewer/)
   gmsh  # benchmark meshes (bench/run.sh)
 )
 source "$(dirname "$0")/apt_install.sh"

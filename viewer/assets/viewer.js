@@ -1,0 +1,272 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// viewer/assets/viewer.js -- the image database in the browser: one control per parameter column
+// of data.csv, orbit by dragging, keys, play, neighbours preloaded, state in the URL, the rows as a
+// filterable table, and (served by penumbra-view) new rows as a running solver writes them.
+"use strict";
+
+const dbBase = document.querySelector('meta[name="pnb-db-base"]').content;
+const live = document.querySelector('meta[name="pnb-live"]').content === "true";
+const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null };
+
+// data.csv as rows of fields (RFC 4180: quoted fields, "" inside quotes).
+function parseCsv(text) {
+  const rows = [];
+  let row = [], field = "", quoted = false;
+  for (let i = 0; i < text.length; ++i) {
+    const c = text[i];
+    if (quoted) {
+      if (c === '"' && text[i + 1] === '"') { field += '"'; ++i; }
+      else if (c === '"') quoted = false;
+      else field += c;
+    } else if (c === '"' && field === "") quoted = true;
+    else if (c === ",") { row.push(field); field = ""; }
+    else if (c === "\n" || c === "\r") {
+      if (c === "\r" && text[i + 1] === "\n") ++i;
+      row.push(field); field = "";
+      if (row.length > 1 || row[0] !== "") rows.push(row);
+      row = [];
+    } else field += c;
+  }
+  if (quoted) throw new Error("data.csv ends inside a quoted field");
+  if (field !== "" || row.length) { row.push(field); rows.push(row); }
+  return rows;
+}
+
+// The database from data.csv's text; throws an Error that says what is wrong.
+function readDatabase(text) {
+  const table = parseCsv(text);
+  if (table.length === 0) throw new Error("data.csv is empty: the database has no header yet");
+  const header = table[0];
+  if (header[header.length - 1] !== "FILE") throw new Error("data.csv's last column is '" + header[header.length - 1] + "', not FILE: this is not a Cinema spec D database");
+  const rows = [];
+  for (let r = 1; r < table.length; ++r) {
+    if (table[r].length !== header.length) throw new Error("data.csv line " + (r + 1) + " has " + table[r].length + " fields; the header has " + header.length);
+    rows.push(table[r]);
+  }
+  return { columns: header.slice(0, -1), rows };
+}
+
+const isNumber = (s) => s !== "" && !isNaN(Number(s));
+function sortedValues(rows, c) {
+  const values = [...new Set(rows.map((r) => r[c]))];
+  return values.every(isNumber) ? values.sort((a, b) => Number(a) - Number(b)) : values.sort();
+}
+
+function showMessage(text) {
+  const m = document.getElementById("message");
+  m.hidden = !text;
+  m.textContent = text || "";
+}
+
+// The row that shows the state: every column equal, else the one that keeps `changed` and most
+// other columns (a named camera's row has its own phi and theta).
+function rowFor(state, changed) {
+  let best = null, bestScore = -1;
+  for (const row of view.rows) {
+    let score = 0;
+    view.columns.forEach((name, c) => { if (row[c] === state[name]) score += name === changed ? 1000 : 1; });
+    if (score > bestScore) { best = row; bestScore = score; }
+  }
+  return best;
+}
+
+function imageUrl(row) { return dbBase + row[row.length - 1].split("/").map(encodeURIComponent).join("/"); }
+
+const preloaded = new Map();
+function preload(row) {
+  if (!row) return;
+  const url = imageUrl(row);
+  if (preloaded.has(url)) return;
+  const img = new Image();
+  img.src = url;
+  preloaded.set(url, img);
+  if (preloaded.size > 256) preloaded.delete(preloaded.keys().next().value);
+}
+
+// Shows the state's image once it has loaded, so the old one stays until then (no flicker).
+function show(changed) {
+  const row = rowFor(view.state, changed);
+  if (!row) { showMessage("The database lists no images yet."); return; }
+  view.columns.forEach((name, c) => { view.state[name] = row[c]; });
+  syncControls();
+  writeHash();
+  const url = imageUrl(row);
+  const next = new Image();
+  next.onload = () => { document.getElementById("image").src = url; showMessage(""); };
+  next.onerror = () => showMessage("Image '" + row[row.length - 1] + "' is listed in data.csv but cannot be loaded.");
+  next.src = url;
+  highlightRow(row);
+  for (const name of view.columns) for (const d of [-1, 1]) preload(rowFor(stepped(name, d), name));
+}
+
+// The state with column `name` moved `delta` values along its sorted values (wrapping for phi).
+function stepped(name, delta) {
+  const values = view.values[name], s = Object.assign({}, view.state);
+  let i = values.indexOf(s[name]) + delta;
+  if (name === "phi") i = (i + values.length) % values.length;
+  s[name] = values[Math.max(0, Math.min(values.length - 1, i))];
+  return s;
+}
+function step(name, delta) {
+  if (!view.values[name]) return;
+  view.state = stepped(name, delta);
+  show(name);
+}
+
+function buildControls() {
+  const form = document.getElementById("controls");
+  form.replaceChildren();
+  for (const name of view.columns) {
+    const values = view.values[name];
+    const label = document.createElement("label");
+    label.textContent = name + (values.length > 1 ? " (" + values.length + ")" : "");
+    label.htmlFor = "control-" + name;
+    form.append(label);
+    if (name === "time") form.append(timeControl(values));
+    else {
+      const select = document.createElement("select");
+      select.id = "control-" + name;
+      for (const v of values) select.append(new Option(v, v));
+      select.onchange = () => { view.state[name] = select.value; show(name); };
+      form.append(select);
+    }
+  }
+}
+
+function timeControl(values) {
+  const box = document.createElement("div");
+  box.className = "row";
+  const slider = document.createElement("input");
+  Object.assign(slider, { type: "range", id: "control-time", min: 0, max: values.length - 1, step: 1 });
+  slider.oninput = () => { view.state.time = view.values.time[Number(slider.value)]; show("time"); };
+  const play = document.createElement("button");
+  play.type = "button";
+  play.id = "play";
+  play.textContent = "▶";
+  play.onclick = togglePlay;
+  const speed = document.createElement("select");
+  speed.id = "speed";
+  for (const fps of [1, 2, 5, 10, 24]) speed.append(new Option(fps + " fps", fps));
+  speed.value = "5";
+  speed.onchange = () => { if (view.playing) { togglePlay(); togglePlay(); } };
+  box.append(slider, play, speed);
+  return box;
+}
+
+function togglePlay() {
+  const button = document.getElementById("play");
+  if (view.playing) { clearInterval(view.playing); view.playing = null; if (button) button.textContent = "▶"; return; }
+  const fps = Number(document.getElementById("speed").value);
+  view.playing = setInterval(() => {
+    const t = view.values.time, i = t.indexOf(view.state.time);
+    view.state.time = t[(i + 1) % t.length];
+    show("time");
+  }, 1000 / fps);
+  if (button) button.textContent = "❚❚";
+}
+
+function syncControls() {
+  for (const name of view.columns) {
+    const el = document.getElementById("control-" + name);
+    if (!el) continue;
+    if (name === "time") el.value = String(view.values.time.indexOf(view.state.time));
+    else el.value = view.state[name];
+  }
+}
+
+function buildTable() {
+  const head = document.querySelector("#rows thead"), body = document.querySelector("#rows tbody");
+  head.replaceChildren();
+  body.replaceChildren();
+  const tr = document.createElement("tr");
+  for (const name of view.columns) { const th = document.createElement("th"); th.textContent = name; tr.append(th); }
+  head.append(tr);
+  for (const row of view.rows) {
+    const r = document.createElement("tr");
+    for (let c = 0; c < view.columns.length; ++c) { const td = document.createElement("td"); td.textContent = row[c]; r.append(td); }
+    r.onclick = () => { view.columns.forEach((name, c) => { view.state[name] = row[c]; }); show(view.columns[0]); };
+    r.row = row;
+    body.append(r);
+  }
+  filterTable();
+}
+function filterTable() {
+  const words = document.getElementById("filter").value.toLowerCase().split(/\s+/).filter(Boolean);
+  for (const r of document.querySelectorAll("#rows tbody tr"))
+    r.hidden = !words.every((w) => r.textContent.toLowerCase().includes(w));
+}
+function highlightRow(row) {
+  for (const r of document.querySelectorAll("#rows tbody tr")) r.classList.toggle("selected", r.row === row);
+}
+
+// The state in the URL's fragment (the token stays in the query, never in a shared link's state).
+function writeHash() {
+  const p = new URLSearchParams();
+  for (const name of view.columns) p.set(name, view.state[name]);
+  history.replaceState(null, "", "#" + p.toString());
+}
+function readHash() {
+  const p = new URLSearchParams(location.hash.slice(1));
+  for (const name of view.columns) if (p.has(name) && view.values[name].includes(p.get(name))) view.state[name] = p.get(name);
+}
+
+// Orbit by dragging: every 24 pixels step phi (horizontal) or theta (vertical) to the next stored value.
+function setupDrag() {
+  const img = document.getElementById("image");
+  let from = null;
+  img.addEventListener("pointerdown", (e) => { from = { x: e.clientX, y: e.clientY }; img.setPointerCapture(e.pointerId); });
+  img.addEventListener("pointerup", () => { from = null; });
+  img.addEventListener("pointermove", (e) => {
+    if (!from) return;
+    const dx = e.clientX - from.x, dy = e.clientY - from.y;
+    if (Math.abs(dx) >= 24 && view.values.phi) { step("phi", dx > 0 ? -1 : 1); from.x = e.clientX; }
+    if (Math.abs(dy) >= 24 && view.values.theta) { step("theta", dy > 0 ? 1 : -1); from.y = e.clientY; }
+  });
+}
+
+function setupKeys() {
+  document.addEventListener("keydown", (e) => {
+    if (e.target.tagName === "INPUT" && e.target.type === "search") return;
+    const keys = { ArrowLeft: ["time", -1], ArrowRight: ["time", 1], ArrowUp: ["theta", 1], ArrowDown: ["theta", -1],
+                   "[": ["phi", -1], "]": ["phi", 1] };
+    if (keys[e.key]) { e.preventDefault(); step(...keys[e.key]); }
+    else if (e.key === " ") { e.preventDefault(); togglePlay(); }
+  });
+}
+
+// Reads data.csv and rebuilds what changed; the state is kept where the new rows still hold it.
+async function load() {
+  let text;
+  try {
+    const response = await fetch(dbBase + "data.csv", { cache: "no-store" });
+    if (!response.ok) throw new Error("data.csv could not be read (HTTP " + response.status + ")");
+    text = await response.text();
+  } catch (e) {
+    showMessage(e.message.includes("data.csv") ? e.message : "data.csv could not be read: " + e.message);
+    return;
+  }
+  if (text === view.csvText) return;
+  view.csvText = text;
+  let db;
+  try { db = readDatabase(text); } catch (e) { showMessage(e.message); return; }
+  const first = view.columns.length === 0;
+  view.columns = db.columns;
+  view.rows = db.rows;
+  for (let c = 0; c < view.columns.length; ++c) view.values[view.columns[c]] = sortedValues(view.rows, c);
+  document.getElementById("status").textContent = view.rows.length + " images" + (live ? " · live" : "");
+  buildControls();
+  buildTable();
+  if (view.rows.length === 0) { showMessage("The database lists no images yet" + (live ? "; new ones appear as they are written." : ".")); return; }
+  if (first) {
+    view.columns.forEach((name, c) => { view.state[name] = view.rows[0][c]; });
+    readHash();
+  }
+  show(view.columns[0]);
+}
+
+setupDrag();
+setupKeys();
+document.getElementById("filter").addEventListener("input", filterTable);
+window.addEventListener("hashchange", () => { readHash(); show(view.columns[0]); });
+load();
+if (live) setInterval(load, 2000);
