@@ -15,7 +15,14 @@ packages=(
   libopenmpi-dev openmpi-bin  # penumbra_mpi and its tests under mpirun
   libmetis-dev  # METIS partitions in the MPI tests
   libcpp-httplib-dev  # penumbra-view (viewer/)
+  chromium  # the viewer's browser tests (tests/viewer/browser)
   gmsh  # benchmark meshes (bench/run.sh)
 )
 source "$(dirname "$0")/apt_install.sh"
 apt_install_missing "${packages[@]}"
+# playwright-core for the viewer's browser tests, at the version package-lock.json records.
+if command -v npm >/dev/null; then
+  npm ci --prefix "$(dirname "$0")/../tests/viewer/browser" --no-audit --no-fund --silent
+else
+  echo "setup: npm not found: the viewer's browser tests will be skipped" >&2
+fi

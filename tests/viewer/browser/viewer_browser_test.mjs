@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// tests/viewer/browser/viewer_browser_test.mjs -- penumbra-view in Debian's chromium, headless,
+// driven by playwright-core: the example's database shown pixel for pixel, time and orbit moved
+// through the controls and the keys, the state in the URL, a live run's new rows, clear messages.
+//
+// usage: node viewer_browser_test.mjs PENUMBRA_VIEW EXAMPLE_PROGRAM OUT_DIR [CHROMIUM]
+import { spawn, execFileSync } from "node:child_process";
+import fs from "node:fs";
+import path from "node:path";
+import { chromium } from "playwright-core";
+
+const [viewBin, exampleBin, outDir, chromiumPath = "/usr/bin/chromium"] = process.argv.slice(2);
+let failures = 0;
+function check(ok, what) {
+  console.log((ok ? "ok   " : "FAIL ") + what);
+  if (!ok) failures += 1;
+}
+
+// A database made by the example mini-app.
+const db = path.join(outDir, "example-db");
+fs.rmSync(outDir, { recursive: true, force: true });
+fs.mkdirSync(outDir, { recursive: true });
+execFileSync(exampleBin, [db], { stdio: "ignore" });
+const rows = fs.readFileSync(path.join(db, "data.csv"), "utf8").trim().split("\n").map((l) => l.split(","));
+const header = rows[0];
+const fileOf = (time, phi, theta) => rows.find((r) => r[0] === time && r[1] === phi && r[2] === theta).at(-1);
+
+// penumbra-view on a free port; the URL it prints carries the token.
+function startViewer(dir) {
+  const child = spawn(viewBin, [dir], { stdio: ["ignore", "pipe", "inherit"] });
+  return new Promise((resolve, reject) => {
+    let out = "";
+    child.stdout.on("data", (d) => {
+      out += d;
+      const m = out.match(/http:\/\/\S+token=[0-9a-f]+/);
+      if (m) resolve({ child, url: m[0] });
+    });
+    child.on("exit", (code) => reject(new Error("penumbra-view exited " + code)));
+  });
+}
+
+// The pixels of the image the page shows, and of `file` decoded by the same browser.
+async function shownPixels(page) {
+  return page.evaluate(() => {
+    const img = document.getElementById("image");
+    const c = document.createElement("canvas");
+    c.width = img.naturalWidth;
+    c.height = img.naturalHeight;
+    c.getContext("2d").drawImage(img, 0, 0);
+    return Array.from(c.getContext("2d").getImageData(0, 0, c.width, c.height).data);
+  });
+}
+async function filePixels(page, file) {
+  const data = "data:image/png;base64," + fs.readFileSync(path.join(db, file)).toString("base64");
+  return page.evaluate(async (src) => {
+    const img = new Image();
+    img.src = src;
+    await img.decode();
+    const c = document.createElement("canvas");
+    c.width = img.naturalWidth;
+    c.height = img.naturalHeight;
+    c.getContext("2d").drawImage(img, 0, 0);
+    return Array.from(c.getContext("2d").getImageData(0, 0, c.width, c.height).data);
+  }, data);
+}
+// page.waitForFunction evaluates strings, which the page's Content-Security-Policy forbids: poll.
+async function waitUntil(page, predicate, arg, what) {
+  for (const start = Date.now(); Date.now() - start < 10000; await new Promise((r) => setTimeout(r, 100)))
+    if (await page.evaluate(predicate, arg)) return;
+  throw new Error("timed out waiting for " + what);
+}
+const samePixels = (a, b) => a.length === b.length && a.every((v, i) => v === b[i]);
+async function waitForFile(page, file) {
+  await waitUntil(page, (f) => decodeURIComponent(document.getElementById("image").src).endsWith("/db/" + f), file, file);
+}
+
+const { child, url } = await startViewer(db);
+// Without the background-networking flags chromium keeps trying hosts a closed network refuses.
+const browser = await chromium.launch({
+  executablePath: chromiumPath,
+  args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync"],
+});
+try {
+  const page = await browser.newPage();
+  await page.goto(url);
+  const times = [...new Set(rows.slice(1).map((r) => r[0]))].sort((a, b) => Number(a) - Number(b));
+  const first = rows[1];
+  await waitForFile(page, first.at(-1));
+  check(samePixels(await shownPixels(page), await filePixels(page, first.at(-1))), "the first row's image, pixel for pixel");
+  check((await page.locator("#controls select, #controls input").count()) >= header.length - 1, "one control per parameter column");
+
+  // Time by the key and by the slider; the state follows in the URL.
+  await page.keyboard.press("ArrowRight");
+  const next = fileOf(times[1], first[1], first[2]);
+  await waitForFile(page, next);
+  check(samePixels(await shownPixels(page), await filePixels(page, next)), "ArrowRight: the next time's image, pixel for pixel");
+  check(new URL(page.url()).hash.includes("time=" + times[1]), "the time is in the URL");
+  await page.locator("#control-time").fill(String(times.length - 1));
+  await waitForFile(page, fileOf(times.at(-1), first[1], first[2]));
+  check(true, "the time slider moves to the last time");
+
+  // Orbit through the phi control and by dragging on the image.
+  const phis = [...new Set(rows.slice(1).map((r) => r[1]))].sort((a, b) => Number(a) - Number(b));
+  await page.locator("#control-phi").selectOption(phis[1]);
+  await waitForFile(page, fileOf(times.at(-1), phis[1], first[2]));
+  check(true, "the phi control orbits");
+  const box = await page.locator("#image").boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width / 2 + 30, box.y + box.height / 2, { steps: 4 });
+  await page.mouse.up();
+  await waitUntil(page, (p) => !document.getElementById("image").src.includes("_phi" + p + "_"), phis[1], "the drag");
+  check(true, "dragging the image orbits to the neighbouring stored phi");
+
+  // A shared link restores the state.
+  const shared = url + "#time=" + times[2] + "&phi=" + phis[0] + "&theta=" + first[2];
+  const other = await browser.newPage();
+  await other.goto(shared);
+  await waitForFile(other, fileOf(times[2], phis[0], first[2]));
+  check(true, "a link with the state in its fragment shows that image");
+
+  // Live: a new row appended by a running solver appears.
+  const before = await page.locator("#status").textContent();
+  fs.appendFileSync(path.join(db, "data.csv"), [String(Number(times.at(-1)) + 1), ...first.slice(1, -1), first.at(-1)].join(",") + "\n");
+  await waitUntil(page, (b) => document.getElementById("status").textContent !== b, before, "the new row");
+  check((await page.locator("#status").textContent()).startsWith(String(rows.length) + " images"), "a new row appears while the page is open");
+
+  // A malformed data.csv gives a message, not a blank page.
+  fs.appendFileSync(path.join(db, "data.csv"), "1,2\n");
+  await waitUntil(page, () => !document.getElementById("message").hidden, null, "the message");
+  check((await page.locator("#message").textContent()).includes("data.csv line"), "a malformed data.csv is named in the page");
+
+  // Without the token: refused.
+  const bare = await browser.newPage();
+  const response = await bare.goto(url.replace(/\?token=.*/, ""));
+  check(response.status() === 403, "the page without the token is refused");
+
+  await page.screenshot({ path: path.join(outDir, "viewer.png") });
+} catch (e) {
+  check(false, "browser session: " + e.message);
+} finally {
+  await browser.close();
+  child.kill("SIGTERM");
+}
+console.log(failures === 0 ? "viewer browser test: ok" : "viewer browser test: " + failures + " failure(s)");
+process.exit(failures === 0 ? 0 : 1);
