@@ -19,7 +19,8 @@ start=$SECONDS
 deadline=$(date -d '+1020 seconds' +%H:%M:%S)
 if [ ! -f "$build/CMakeCache.txt" ]; then
   cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release --toolchain cmake/toolchains/aarch64-linux-gnu.cmake \
-    -DPNB_ENABLE_VTK=OFF -DPNB_ENABLE_EGL=OFF -DPNB_ENABLE_FORTRAN=OFF -DPNB_BUILD_EXAMPLES=OFF -DPNB_ENABLE_MPI=OFF
+    -DPNB_ENABLE_VTK=OFF -DPNB_ENABLE_EGL=OFF -DPNB_ENABLE_FORTRAN=OFF -DPNB_BUILD_EXAMPLES=OFF -DPNB_ENABLE_MPI=OFF \
+    -DPNB_ENABLE_VIEWER=OFF
 fi
 # Building a suite lists its tests, through the emulator (gtest_discover_tests).
 suites=(penumbra_core_tests penumbra_compression_tests

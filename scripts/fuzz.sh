@@ -29,7 +29,7 @@ CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithD
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
   -DCMAKE_C_FLAGS="$flags" -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DBUILD_SHARED_LIBS=OFF -DPNB_BUILD_FUZZERS=ON -DPNB_BUILD_TESTS=OFF -DPNB_BUILD_EXAMPLES=OFF \
-  -DPNB_BUILD_BENCHMARKS=OFF -DPNB_ENABLE_FORTRAN=OFF -DPNB_ENABLE_EGL=OFF >/dev/null
+  -DPNB_BUILD_BENCHMARKS=OFF -DPNB_ENABLE_FORTRAN=OFF -DPNB_ENABLE_EGL=OFF -DPNB_ENABLE_VIEWER=OFF >/dev/null
 targets=()
 for h in "${harnesses[@]}"; do targets+=("pnb_fuzz_$h"); done
 cmake --build "$build" --target "${targets[@]}"
