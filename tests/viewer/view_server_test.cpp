@@ -2,6 +2,7 @@
 // tests/viewer/view_server_test.cpp -- penumbra-view's server: only the session's requests, only
 // files inside the database, the page exported for static servers
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <httplib.h>
 
 #include <filesystem>
