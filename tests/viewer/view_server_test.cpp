@@ -153,7 +153,11 @@ TEST(ViewServer, FiftyClientsAtOnce) {
         const auto t0 = std::chrono::steady_clock::now();
         const auto res = c.Get(r.with_token(paths[k % 3]));
         latency[i].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-        if (!res || res->status != expect[k % 3]) ++wrong;
+        if (!res || res->status != expect[k % 3]) {
+          ++wrong;
+          std::fprintf(stderr, "client %d request %d (%.0f ms): %s\n", i, k, latency[i].back(),
+                       res ? ("status " + std::to_string(res->status)).c_str() : httplib::to_string(res.error()).c_str());
+        }
       }
     });
   for (auto& t : clients) t.join();

@@ -3,6 +3,7 @@
 #include "view_server.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <fstream>
 #include <sstream>
@@ -63,6 +64,7 @@ struct ViewServer::Impl {
   httplib::Server server;
   int port = 0;
   std::string cookie_name;
+  socket_t listening_socket = INVALID_SOCKET;
 
   bool allowed(const httplib::Request& req) const {
     const std::string& t = options.token;
@@ -127,10 +129,18 @@ ViewServer::ViewServer(ViewOptions options) : m_impl(std::make_unique<Impl>()) {
     throw Error(ErrorCode::io_error, "penumbra-view: '" + im.options.database.string() + "' is not a directory");
   im.root = std::filesystem::canonical(im.options.database, ec);
   im.routes();
+  im.server.set_socket_options([&im](socket_t sock) {
+    httplib::default_socket_options(sock);
+    im.listening_socket = sock;
+  });
   im.port = im.options.port == 0 ? im.server.bind_to_any_port(im.options.host)
                                  : (im.server.bind_to_port(im.options.host, im.options.port) ? im.options.port : -1);
   if (im.port <= 0)
     throw Error(ErrorCode::io_error, "penumbra-view: cannot listen on " + im.options.host + ":" + std::to_string(im.options.port));
+  // Debian's cpp-httplib listens with a backlog of 5, built into its library: a page preloading
+  // its images, or a few browsers at once, connect faster than the workers accept, and the dropped
+  // connections wait seconds for an answer. Listening again on the bound socket raises the backlog.
+  if (im.listening_socket != INVALID_SOCKET) ::listen(im.listening_socket, SOMAXCONN);
   // Cookies ignore ports: each viewer on a host keeps its own.
   im.cookie_name = "pnb_view_" + std::to_string(im.port);
 }
