@@ -15,6 +15,7 @@ packages=(
   libopenmpi-dev openmpi-bin  # penumbra_mpi and its tests under mpirun
   libmetis-dev  # METIS partitions in the MPI tests
   libcpp-httplib-dev  # penumbra-view (viewer/)
+  libusb-1.0-0-dev  # penumbra-view's 3D mouse
   chromium  # the viewer's browser tests (tests/viewer/browser)
   gmsh  # benchmark meshes (bench/run.sh)
 )

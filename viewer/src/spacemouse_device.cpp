@@ -60,8 +60,9 @@ void SpaceMouse::run() {
   }
 }
 
-// A missing or refused device is looked for again when one arrives; one that could not be opened
-// or read for another reason (busy, a transfer error) is tried again after the arrival wait.
+// A missing device is looked for again when one arrives; one that was refused (the udev rule may
+// have been added since), or could not be opened or read for another reason (busy, a transfer
+// error), is tried again after each arrival wait.
 void SpaceMouse::loop() {
   bool look = true;
   while (!m_stopping) {
@@ -75,7 +76,7 @@ void SpaceMouse::loop() {
     }
     if (m_stopping) return;
     const bool arrived = m_transport->wait_for_arrival(m_options.arrival_wait);
-    look = arrived || result == TransportResult::failed;
+    look = arrived || result == TransportResult::failed || result == TransportResult::access_denied;
   }
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,5 +40,8 @@ public:
   /// sends no hotplug notifications, when it is time to look again.
   virtual bool wait_for_arrival(std::chrono::milliseconds timeout) = 0;
 };
+
+/// The system's USB (libusb_transport.h), or null where penumbra-view is built without libusb-1.0.
+std::unique_ptr<SpaceMouseTransport> system_spacemouse_transport();
 
 }  // namespace penumbra::viewer
