@@ -8,12 +8,14 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include "assets.h"
+#include "event_hub.h"
 #include "penumbra/core/error.h"
 #include "request_path.h"
 #include "session_token.h"
@@ -78,7 +80,8 @@ TEST(SessionToken, RandomAndComparedWhole) {
 struct Running {
   ViewServer server;
   std::thread thread;
-  explicit Running(const fs::path& db) : server(ViewOptions{db, "127.0.0.1", 0, ""}), thread([this] { server.run(); }) {
+  explicit Running(const fs::path& db, bool event_stream = true)
+      : server(ViewOptions{db, "127.0.0.1", 0, "", event_stream}), thread([this] { server.run(); }) {
     httplib::Client probe("127.0.0.1", server.port());
     for (int i = 0; i < 200 && !probe.Get("/"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
@@ -168,6 +171,104 @@ TEST(ViewServer, FiftyClientsAtOnce) {
   std::printf("%zu requests from 50 clients in 3 s: median %.2f ms, 99th percentile %.2f ms\n", all.size(),
               all[all.size() / 2], all[all.size() * 99 / 100]);
   EXPECT_EQ(wrong.load(), 0);
+}
+
+// A page listening on /events on its own thread: what it received, and the response's headers.
+struct Listener {
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::string received;
+  int status = 0;
+  std::string content_type, content_encoding;
+  std::thread thread;
+
+  Listener(int port, const std::string& path) : thread([this, port, path] { listen(port, path); }) {}
+  ~Listener() { thread.join(); }
+  void listen(int port, const std::string& path) {
+    httplib::Client c("127.0.0.1", port);
+    c.set_read_timeout(30, 0);
+    c.Get(
+        path, {{"Accept-Encoding", "gzip, deflate, br"}},
+        [this](const httplib::Response& res) {
+          std::lock_guard<std::mutex> lock(mutex);
+          status = res.status;
+          content_type = res.get_header_value("Content-Type");
+          content_encoding = res.get_header_value("Content-Encoding");
+          changed.notify_all();
+          return true;
+        },
+        [this](const char* data, std::size_t size) {
+          std::lock_guard<std::mutex> lock(mutex);
+          received.append(data, size);
+          changed.notify_all();
+          return true;
+        });
+  }
+  bool wait_for(const std::string& text) {
+    std::unique_lock<std::mutex> lock(mutex);
+    return changed.wait_for(lock, std::chrono::seconds(10), [&] { return received.find(text) != std::string::npos; });
+  }
+};
+
+bool wait_for_listeners(const ViewServer& server, std::size_t n) {
+  for (int i = 0; i < 500 && server.listeners() != n; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  return server.listeners() == n;
+}
+
+TEST(ViewServer, EventsReachEveryOpenPage) {
+  const Database d;
+  Running r(d.db);
+  r.server.publish_status("no 3D mouse found");
+  Listener first(r.server.port(), r.with_token("/events")), second(r.server.port(), r.with_token("/events"));
+  ASSERT_TRUE(first.wait_for(status_json("no 3D mouse found"))) << "a new page gets the last status";
+  ASSERT_TRUE(second.wait_for(status_json("no 3D mouse found")));
+  ViewEvent turn;
+  turn.d_phi = -1.5;
+  turn.d_time = 0.25;
+  r.server.publish(turn);
+  r.server.publish_status("3D mouse unplugged; waiting for it to come back");
+  for (Listener* page : {&first, &second}) {
+    EXPECT_TRUE(page->wait_for("data: " + motion_json(turn) + "\n\n"));
+    EXPECT_TRUE(page->wait_for("data: " + status_json("3D mouse unplugged; waiting for it to come back") + "\n\n"));
+    std::lock_guard<std::mutex> lock(page->mutex);
+    EXPECT_EQ(page->status, 200);
+    EXPECT_EQ(page->content_type, "text/event-stream");
+    EXPECT_EQ(page->content_encoding, "") << "compressed events would be held back";
+  }
+  EXPECT_EQ(r.server.listeners(), 2u);
+  r.server.stop();
+}
+
+TEST(ViewServer, EventsNeedTheToken) {
+  const Database d;
+  Running r(d.db);
+  httplib::Client c("127.0.0.1", r.server.port());
+  EXPECT_EQ(c.Get("/events")->status, 403);
+  EXPECT_EQ(c.Get("/events?token=" + std::string(32, '0'))->status, 403);
+  EXPECT_EQ(r.server.listeners(), 0u);
+}
+
+TEST(ViewServer, EventsForABoundedNumberOfPages) {
+  const Database d;
+  Running r(d.db);
+  std::vector<std::unique_ptr<Listener>> pages;
+  for (std::size_t i = 0; i < EventHub::kMaxSubscribers; ++i)
+    pages.push_back(std::make_unique<Listener>(r.server.port(), r.with_token("/events")));
+  ASSERT_TRUE(wait_for_listeners(r.server, EventHub::kMaxSubscribers));
+  httplib::Client c("127.0.0.1", r.server.port());
+  const auto refused = c.Get(r.with_token("/events"));
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 503);
+  // Files are still served while every stream is open.
+  EXPECT_EQ(c.Get(r.with_token("/db/data.csv"))->status, 200);
+  r.server.stop();
+}
+
+TEST(ViewServer, NoEventsWhenTheStreamIsOff) {
+  const Database d;
+  Running r(d.db, false);
+  httplib::Client c("127.0.0.1", r.server.port());
+  EXPECT_EQ(c.Get(r.with_token("/events"))->status, 404);
 }
 
 TEST(ViewServer, MissingDatabaseIsAClearError) {

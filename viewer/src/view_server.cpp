@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "assets.h"
+#include "event_hub.h"
 #include "penumbra/core/error.h"
 #include "request_path.h"
 #include "session_token.h"
@@ -49,6 +50,11 @@ std::string cookie(const httplib::Request& req, const std::string& name) {
   return "";
 }
 
+// How long a stream waits for an event before it checks its page, and how many such waits pass
+// before it writes a comment: writing is how a page that went away is noticed.
+constexpr std::chrono::milliseconds kEventWait{1000};
+constexpr int kWaitsPerKeepAlive = 2;
+
 void secure_headers(httplib::Response& res) {
   res.set_header("X-Content-Type-Options", "nosniff");
   res.set_header("Referrer-Policy", "no-referrer");
@@ -65,12 +71,14 @@ struct ViewServer::Impl {
   int port = 0;
   std::string cookie_name;
   socket_t listening_socket = INVALID_SOCKET;
+  EventHub events;
 
   bool allowed(const httplib::Request& req) const {
     const std::string& t = options.token;
     return same_token(req.get_param_value("token"), t) || same_token(cookie(req, cookie_name), t);
   }
   void routes();
+  void event_route();
 };
 
 void ViewServer::Impl::routes() {
@@ -118,6 +126,35 @@ void ViewServer::Impl::routes() {
   server.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) {
     res.set_content("{\"database\": \"" + root.filename().string() + "\"}", "application/json");
   });
+  if (options.event_stream) event_route();
+}
+
+// Each page's stream holds one of the server's threads while it is open: the pool has one more
+// thread for each page that may listen, so files are still served.
+void ViewServer::Impl::event_route() {
+  server.new_task_queue = [] { return new httplib::ThreadPool(CPPHTTPLIB_THREAD_POOL_COUNT + EventHub::kMaxSubscribers); };
+  server.Get("/events", [this](const httplib::Request&, httplib::Response& res) {
+    auto subscriber = events.subscribe();
+    if (!subscriber) {
+      res.status = 503;
+      res.set_content("penumbra-view: " + std::to_string(EventHub::kMaxSubscribers) + " pages already receive events\n", "text/plain");
+      return;
+    }
+    // Exactly this media type: cpp-httplib compresses other text types, which would hold events back.
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, subscriber, quiet = 0](std::size_t, httplib::DataSink& sink) mutable {
+          std::optional<std::string> text = events.next(*subscriber, kEventWait);
+          if (!text) return false;
+          if (text->empty()) {
+            if (++quiet < kWaitsPerKeepAlive) return sink.is_writable();
+            *text = ":\n\n";
+          }
+          quiet = 0;
+          return sink.write(text->data(), text->size());
+        },
+        [this, subscriber](bool) { events.unsubscribe(subscriber); });
+  });
 }
 
 ViewServer::ViewServer(ViewOptions options) : m_impl(std::make_unique<Impl>()) {
@@ -157,7 +194,16 @@ std::string ViewServer::url() const {
 }
 
 void ViewServer::run() { m_impl->server.listen_after_bind(); }
-void ViewServer::stop() { m_impl->server.stop(); }
+
+// The streams end first: the server waits for its threads, which they hold.
+void ViewServer::stop() {
+  m_impl->events.close();
+  m_impl->server.stop();
+}
+
+void ViewServer::publish(const ViewEvent& event) { m_impl->events.publish(event); }
+void ViewServer::publish_status(const std::string& message) { m_impl->events.publish_status(message); }
+std::size_t ViewServer::listeners() const { return m_impl->events.subscribers(); }
 
 void export_page(const std::filesystem::path& database) {
   std::error_code ec;

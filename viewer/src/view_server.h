@@ -5,6 +5,8 @@
 #include <memory>
 #include <string>
 
+#include "spacemouse_mapping.h"
+
 namespace penumbra::viewer {
 
 struct ViewOptions {
@@ -12,13 +14,15 @@ struct ViewOptions {
   std::string host = "127.0.0.1";  ///< the address to listen on
   int port = 0;                    ///< 0: a free port
   std::string token;               ///< empty: a new random one (session_token.h)
+  bool event_stream = true;        ///< serve /events (the 3D mouse's events and status)
 };
 
 /// Serves, to requests that carry the session token (a `token` query parameter, or the cookie
 /// the page's first request sets): the page at `/`, its files at `/assets/NAME`, the database's
-/// files at `/db/PATH` (only regular files inside the database: request_path.h) and
-/// `/api/info`. Anything else, or a request without the token, gets 404 or 403 and nothing of
-/// the database. Every response forbids other origins' scripts and sends no referrer, so the token
+/// files at `/db/PATH` (only regular files inside the database: request_path.h), `/api/info`,
+/// and, where `event_stream` is on, `/events`: what publish() and publish_status() send, as
+/// server-sent events to at most EventHub::kMaxSubscribers pages at once (503 beyond). Anything
+/// else, or a request without the token, gets 404 or 403 and nothing of the database. Every response forbids other origins' scripts and sends no referrer, so the token
 /// does not leave the page.
 class ViewServer {
 public:
@@ -36,6 +40,13 @@ public:
   /// Serves until stop() (from another thread or a signal handler's thread).
   void run();
   void stop();
+
+  /// To every page listening on /events, as {"type":"motion",...} (event_hub.h); from any thread.
+  void publish(const ViewEvent& event);
+  /// To every page listening on /events and to each that opens later, as {"type":"status",...}.
+  void publish_status(const std::string& message);
+  /// How many pages listen on /events.
+  std::size_t listeners() const;
 
 private:
   struct Impl;
