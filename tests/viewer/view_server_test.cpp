@@ -114,6 +114,7 @@ TEST(ViewServer, ThePageSetsTheSessionCookie) {
   const auto page = c.Get(r.with_token("/"));
   ASSERT_TRUE(page);
   EXPECT_NE(page->body.find("pnb-db-base\" content=\"db/\""), std::string::npos);
+  EXPECT_NE(page->body.find("pnb-events\" content=\"true\""), std::string::npos);
   const std::string set_cookie = page->get_header_value("Set-Cookie");
   EXPECT_NE(set_cookie.find("HttpOnly"), std::string::npos);
   EXPECT_NE(set_cookie.find("SameSite=Strict"), std::string::npos);
@@ -269,6 +270,7 @@ TEST(ViewServer, NoEventsWhenTheStreamIsOff) {
   Running r(d.db, false);
   httplib::Client c("127.0.0.1", r.server.port());
   EXPECT_EQ(c.Get(r.with_token("/events"))->status, 404);
+  EXPECT_NE(c.Get(r.with_token("/"))->body.find("pnb-events\" content=\"false\""), std::string::npos);
 }
 
 TEST(ViewServer, MissingDatabaseIsAClearError) {
@@ -281,6 +283,7 @@ TEST(ViewServer, ExportWritesThePageIntoTheDatabase) {
   std::ifstream in(d.db / "index.html");
   const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(html.find("pnb-db-base\" content=\"\""), std::string::npos);
+  EXPECT_NE(html.find("pnb-events\" content=\"false\""), std::string::npos) << "no server to listen to";
   EXPECT_NE(html.find("viewer/viewer.js"), std::string::npos);
   EXPECT_TRUE(fs::exists(d.db / "viewer" / "viewer.js"));
   EXPECT_TRUE(fs::exists(d.db / "viewer" / "viewer.css"));

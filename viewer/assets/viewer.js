@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // viewer/assets/viewer.js -- the image database in the browser: one control per parameter column
 // of data.csv, orbit by dragging, keys, play, neighbours preloaded, state in the URL, the rows as a
-// filterable table, and (served by penumbra-view) new rows as a running solver writes them.
+// filterable table, and (served by penumbra-view) new rows as a running solver writes them and the
+// 3D mouse's motion.
 "use strict";
 
 const dbBase = document.querySelector('meta[name="pnb-db-base"]').content;
 const live = document.querySelector('meta[name="pnb-live"]').content === "true";
-const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null };
+const events = document.querySelector('meta[name="pnb-events"]').content === "true";
+const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null, zoom: 1 };
 
 // data.csv as rows of fields (RFC 4180: quoted fields, "" inside quotes).
 function parseCsv(text) {
@@ -154,6 +156,7 @@ function timeControl(values) {
 }
 
 function togglePlay() {
+  if (!view.values.time) return;
   const button = document.getElementById("play");
   if (view.playing) { clearInterval(view.playing); view.playing = null; if (button) button.textContent = "▶"; return; }
   const fps = Number(document.getElementById("speed").value);
@@ -234,6 +237,77 @@ function setupKeys() {
   });
 }
 
+// The 3D mouse (penumbra-view's /events): its motion comes in small amounts (degrees, time steps),
+// which add up until they reach the neighbouring stored value, as a drag steps every 24 pixels.
+const motion = { phi: 0, theta: 0, time: 0, last: 0 };
+const kMotionPause = 400;   // ms without motion after which what had added up is dropped
+const kFallbackGap = 30;    // degrees between values that are not numbers
+const kMaxZoom = 8;
+
+// How much motion takes column `name` to its neighbour in direction `d`: the angle between them
+// (phi wraps around), or one time step; Infinity at an end.
+function gap(name, d) {
+  const values = view.values[name], i = values.indexOf(view.state[name]);
+  const wraps = name === "phi" && (i + d < 0 || i + d >= values.length);
+  const j = wraps ? (i + d + values.length) % values.length : i + d;
+  if (d === 0 || i < 0 || j < 0 || j >= values.length || j === i) return Infinity;
+  if (name === "time") return 1;
+  const angle = Math.abs(Number(values[j]) - Number(values[i]));
+  const g = wraps ? 360 - angle : angle;
+  return Number.isFinite(g) && g > 0 ? g : kFallbackGap;
+}
+
+function moveBy(name, amount) {
+  if (!amount || !view.values[name] || view.values[name].length < 2) return;
+  motion[name] += amount;
+  for (;;) {
+    const d = Math.sign(motion[name]), g = gap(name, d);
+    if (!Number.isFinite(g)) { motion[name] = 0; return; }
+    if (Math.abs(motion[name]) < g) return;
+    motion[name] -= d * g;
+    step(name, d);
+  }
+}
+
+function setZoom(zoom) {
+  view.zoom = Math.min(kMaxZoom, Math.max(1, zoom));
+  document.getElementById("image").style.transform = view.zoom === 1 ? "" : "scale(" + view.zoom + ")";
+}
+
+// Button 1: the first row's orbit, unzoomed, the other columns as they are.
+function resetView() {
+  setZoom(1);
+  motion.phi = motion.theta = motion.time = 0;
+  for (const name of ["phi", "theta"]) if (view.values[name]) view.state[name] = view.rows[0][view.columns.indexOf(name)];
+  show(view.values.phi ? "phi" : view.columns[0]);
+}
+
+function applyMotion(e) {
+  const now = performance.now();
+  if (now - motion.last > kMotionPause) motion.phi = motion.theta = motion.time = 0;
+  motion.last = now;
+  if (view.rows.length === 0) return;
+  if (e.reset_view) resetView();
+  if (e.toggle_play) togglePlay();
+  moveBy("phi", e.d_phi);
+  moveBy("theta", e.d_theta);
+  moveBy("time", e.d_time);
+  if (e.zoom !== 1) setZoom(view.zoom * e.zoom);
+}
+
+// A stream that was refused (too many pages listen) is asked for again later; one that drops,
+// EventSource opens again by itself.
+function listenToDevices() {
+  const source = new EventSource("events");
+  source.onmessage = (m) => {
+    let e;
+    try { e = JSON.parse(m.data); } catch { return; }
+    if (e.type === "motion") applyMotion(e);
+    else if (e.type === "status") document.getElementById("device").textContent = e.message;
+  };
+  source.onerror = () => { if (source.readyState === EventSource.CLOSED) setTimeout(listenToDevices, 5000); };
+}
+
 // Reads data.csv and rebuilds what changed; the state is kept where the new rows still hold it.
 async function load() {
   let text;
@@ -270,3 +344,4 @@ document.getElementById("filter").addEventListener("input", filterTable);
 window.addEventListener("hashchange", () => { readHash(); show(view.columns[0]); });
 load();
 if (live) setInterval(load, 2000);
+if (events) listenToDevices();

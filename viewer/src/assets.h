@@ -18,8 +18,9 @@ const std::vector<Asset>& assets();
 const Asset* find_asset(const std::string& name);
 
 /// The page (index.html) with its placeholders filled: where the database's files are (`db_base`,
-/// "db/" when served, "" when exported into the database) and where the assets are.
-std::string page(const std::string& db_base, const std::string& assets_base, bool live);
+/// "db/" when served, "" when exported into the database), where the assets are, whether it reads
+/// data.csv again as it grows (`live`) and whether it listens on /events (`events`).
+std::string page(const std::string& db_base, const std::string& assets_base, bool live, bool events = false);
 
 /// The media type of a file by its extension.
 std::string media_type(const std::string& path);

@@ -24,11 +24,12 @@ const Asset* find_asset(const std::string& name) {
   return it == all.end() ? nullptr : &*it;
 }
 
-std::string page(const std::string& db_base, const std::string& assets_base, bool live) {
+std::string page(const std::string& db_base, const std::string& assets_base, bool live, bool events) {
   std::string html = find_asset("index.html")->content;
   replace_all(html, "{{DB_BASE}}", db_base);
   replace_all(html, "{{ASSETS}}", assets_base);
   replace_all(html, "{{LIVE}}", live ? "true" : "false");
+  replace_all(html, "{{EVENTS}}", events ? "true" : "false");
   return html;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 #include <string>
 
 #include "penumbra/core/error.h"
@@ -22,10 +23,12 @@ bool ViewEvent::idle() const {
 }
 
 void check_settings(const MappingSettings& settings) {
+  std::ostringstream sensitivity;
+  sensitivity << settings.sensitivity;
   require(std::isfinite(settings.sensitivity) && settings.sensitivity > 0 && settings.sensitivity <= 10,
-          "--spacemouse-sensitivity: " + std::to_string(settings.sensitivity) + " is not in (0, 10]");
+          "penumbra-view --spacemouse-sensitivity: " + sensitivity.str() + " is not in (0, 10]");
   require(settings.dead_zone >= 0 && settings.dead_zone < kFullDeflection,
-          "--spacemouse-deadzone: " + std::to_string(settings.dead_zone) + " is not in [0, " +
+          "penumbra-view --spacemouse-deadzone: " + std::to_string(settings.dead_zone) + " is not in [0, " +
               std::to_string(kFullDeflection) + ")");
 }
 

@@ -101,7 +101,7 @@ void ViewServer::Impl::routes() {
   server.Get("/", [this](const httplib::Request& req, httplib::Response& res) {
     if (same_token(req.get_param_value("token"), options.token))
       res.set_header("Set-Cookie", cookie_name + "=" + options.token + "; HttpOnly; SameSite=Strict; Path=/");
-    res.set_content(page("db/", "assets/", true), "text/html; charset=utf-8");
+    res.set_content(page("db/", "assets/", true, options.event_stream), "text/html; charset=utf-8");
   });
   server.Get(R"(/assets/([A-Za-z0-9_.-]+))", [](const httplib::Request& req, httplib::Response& res) {
     const Asset* a = find_asset(req.matches[1]);

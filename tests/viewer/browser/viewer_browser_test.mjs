@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/viewer/browser/viewer_browser_test.mjs -- penumbra-view in Debian's chromium, headless,
 // driven by playwright-core: the example's database shown pixel for pixel, time and orbit moved
-// through the controls and the keys, the state in the URL, a live run's new rows, clear messages.
+// through the controls and the keys, the state in the URL, a 3D mouse's recorded reports moving the
+// view, a live run's new rows, clear messages.
 //
 // usage: node viewer_browser_test.mjs PENUMBRA_VIEW EXAMPLE_PROGRAM OUT_DIR [CHROMIUM]
 import { spawn, execFileSync } from "node:child_process";
@@ -25,9 +26,16 @@ const rows = fs.readFileSync(path.join(db, "data.csv"), "utf8").trim().split("\n
 const header = rows[0];
 const fileOf = (time, phi, theta) => rows.find((r) => r[0] === time && r[1] === phi && r[2] === theta).at(-1);
 
+// A 3D mouse's recorded reports (newer layout: id 1, then translation and rotation as int16 little
+// endian): slid left, pushed down and twisted counterclockwise seen from above (x -350, z +350,
+// rz -350) for 36 reports 30 ms apart, then at rest. penumbra-view plays them through its parser and
+// mapping when it gets SIGUSR1. Each report stands for 30 to 50 ms: phi turns by 97 to 162 degrees.
+const spacemouseScript = path.join(outDir, "spacemouse.script");
+fs.writeFileSync(spacemouseScript, "30 01 a2 fe 00 00 5e 01 00 00 00 00 a2 fe\n".repeat(36) + "30 01" + " 00".repeat(12) + "\n");
+
 // penumbra-view on a free port; the URL it prints carries the token.
 function startViewer(dir) {
-  const child = spawn(viewBin, [dir], { stdio: ["ignore", "pipe", "inherit"] });
+  const child = spawn(viewBin, [dir, "--spacemouse-script", spacemouseScript], { stdio: ["ignore", "pipe", "inherit"] });
   return new Promise((resolve, reject) => {
     let out = "";
     child.stdout.on("data", (d) => {
@@ -119,6 +127,23 @@ try {
   await other.goto(shared);
   await waitForFile(other, fileOf(times[2], phis[0], first[2]));
   check(true, "a link with the state in its fragment shows that image");
+
+  // The 3D mouse: its status in the page, then its reports orbit to the next stored phi (90 degrees
+  // away; the one after is 90 more), move time back and zoom in.
+  await page.locator("#control-phi").selectOption(phis[0]);
+  await waitForFile(page, fileOf(times.at(-1), phis[0], first[2]));
+  const device = () => page.locator("#device").textContent();
+  await waitUntil(page, () => document.getElementById("device").textContent === "no 3D mouse found", null, "the 3D mouse's status");
+  check(true, "the page shows the 3D mouse's status");
+  child.kill("SIGUSR1");
+  await waitUntil(page, () => document.getElementById("device").textContent.includes("unplugged"), null, "the scripted 3D mouse");
+  check((await device()).startsWith("3D mouse unplugged"), "the 3D mouse's reports played, then it unplugged");
+  const moved = new URLSearchParams(new URL(page.url()).hash.slice(1));
+  check(moved.get("phi") === phis[1], "twisting the 3D mouse orbits to the next stored phi (" + moved.get("phi") + ")");
+  check(times.indexOf(moved.get("time")) < times.length - 1, "sliding it left moves time back (" + moved.get("time") + ")");
+  await waitForFile(page, fileOf(moved.get("time"), moved.get("phi"), first[2]));
+  check(true, "the image follows the 3D mouse");
+  check((await page.locator("#image").evaluate((img) => img.style.transform)).startsWith("scale("), "pushing it down zooms in");
 
   // Live: a new row appended by a running solver appears.
   const before = await page.locator("#status").textContent();
