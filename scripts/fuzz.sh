@@ -15,9 +15,9 @@ build=build-fuzz
 case "$seconds" in '' | *[!0-9]*) echo "usage: scripts/fuzz.sh [SECONDS]" >&2; exit 2 ;; esac
 
 # name and -max_len per harness: a little above the largest seed, so mutations can grow it.
-harnesses=(config cinema_csv steps_csv stored_mesh coordinate_log field_file netcdf_size input_series request_path)
+harnesses=(config cinema_csv steps_csv stored_mesh coordinate_log field_file netcdf_size input_series request_path spacemouse)
 declare -A max_len=([config]=8192 [cinema_csv]=4096 [steps_csv]=2048 [stored_mesh]=4096 [coordinate_log]=1024 [field_file]=16384
-                    [netcdf_size]=8192 [input_series]=4096 [request_path]=2048)
+                    [netcdf_size]=8192 [input_series]=4096 [request_path]=2048 [spacemouse]=1024)
 declare -A dict=([config]=tests/fuzz/config.dict)
 
 # Coverage instrumentation and both sanitizers on every library; -fsanitize=fuzzer (libFuzzer's
