@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// viewer/src/main.cpp -- penumbra-view DB [--host H] [--port N] | penumbra-view --export DB
+// viewer/src/main.cpp -- penumbra-view DB [--store DIR --config FILE] [--host H] [--port N] | --export DB
 #include <pthread.h>
 
 #include <csignal>
@@ -13,28 +13,33 @@
 namespace {
 
 const char* const kUsage =
-    "usage: penumbra-view DB [--host ADDRESS] [--port N]\n"
+    "usage: penumbra-view DB [--store DIR --config FILE] [--host ADDRESS] [--port N]\n"
     "       penumbra-view --export DB\n"
     "  Serves the Cinema image database DB to a browser: open the URL it prints (it carries a\n"
     "  per-session token, which keeps other users of the machine out). Listens on 127.0.0.1 and\n"
     "  a free port unless told otherwise. --export writes the page into DB (index.html, viewer/)\n"
-    "  so that any static file server shows it.\n";
+    "  so that any static file server shows it. With --store (the run's \"store\" directory) and\n"
+    "  --config (the config the run was given), the page also renders views that were never\n"
+    "  stored: any camera, transfer function and stored step.\n";
 
 // SIGINT and SIGTERM are taken by a thread that waits for them (sigwait), so that stopping the
 // server happens outside a signal handler.
-int serve(const std::string& db, const std::string& host, int port) {
+int serve(const penumbra::viewer::ViewOptions& options) {
   sigset_t stop_signals;
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
-  penumbra::viewer::ViewServer server({db, host, port, ""});
+  penumbra::viewer::ViewServer server(options);
   std::thread waiter([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
     server.stop();
   });
-  std::cout << "penumbra-view: serving '" << db << "'; open\n  " << server.url() << "\n" << std::flush;
+  std::cout << "penumbra-view: serving '" << options.database.string() << "'"
+            << (options.store.empty() ? "" : " and views of the store '" + options.store + "'") << "; open\n  "
+            << server.url() << "\n"
+            << std::flush;
   server.run();
   // Stopped by a signal, or the server ended by itself: then wake the waiter.
   pthread_kill(waiter.native_handle(), SIGTERM);
@@ -45,8 +50,8 @@ int serve(const std::string& db, const std::string& host, int port) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string db, host = "127.0.0.1";
-  int port = 0;
+  penumbra::viewer::ViewOptions options;
+  std::string db;
   bool do_export = false;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -57,10 +62,14 @@ int main(int argc, char** argv) {
       } else if (a == "--export") {
         do_export = true;
       } else if (a == "--host" && i + 1 < argc) {
-        host = argv[++i];
+        options.host = argv[++i];
       } else if (a == "--port" && i + 1 < argc) {
-        port = std::stoi(argv[++i]);
-        if (port < 0 || port > 65535) throw std::invalid_argument("port");
+        options.port = std::stoi(argv[++i]);
+        if (options.port < 0 || options.port > 65535) throw std::invalid_argument("port");
+      } else if (a == "--store" && i + 1 < argc) {
+        options.store = argv[++i];
+      } else if (a == "--config" && i + 1 < argc) {
+        options.config = argv[++i];
       } else if (db.empty() && a.rfind("--", 0) != 0) {
         db = a;
       } else {
@@ -68,6 +77,8 @@ int main(int argc, char** argv) {
       }
     }
     if (db.empty()) throw std::invalid_argument("DB");
+    if (options.store.empty() != options.config.empty()) throw std::invalid_argument("--store and --config go together");
+    options.database = db;
   } catch (const std::exception&) {
     std::cerr << kUsage;
     return 2;
@@ -78,7 +89,7 @@ int main(int argc, char** argv) {
       std::cout << "penumbra-view: wrote '" << db << "/index.html'\n";
       return 0;
     }
-    return serve(db, host, port);
+    return serve(options);
   } catch (const penumbra::Error& e) {
     std::cerr << e.what() << "\n";
     return 1;
