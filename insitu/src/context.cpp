@@ -15,6 +15,7 @@
 #include <tuple>
 #include <utility>
 
+#include "atomic_file.h"
 #include "field_stages.h"
 #include "field_store.h"
 #include "ghost_cells.h"
@@ -162,7 +163,11 @@ Context::Context(Config config, std::shared_ptr<RankGroup> group)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
   if (m_group->rank() == 0) m_writer = std::make_unique<ImageWriter>(m_config);
-  if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
+  if (m_config.store) {
+    m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
+    if (m_group->rank() == 0 && !m_config.text.empty())
+      write_file_atomic(m_config.store->directory + "/config.json", m_config.text, "store");
+  }
 }
 
 Context::~Context() = default;

@@ -107,7 +107,8 @@ ViewRequest at(std::size_t step, double phi, double theta = 30) {
 
 TEST(StoreView, StoredCamerasGiveTheRunsImages) {
   const StoredRun r;
-  StoreView view(r.store(), r.config);
+  // The config the store keeps (config.json, written by the run) is the run's.
+  StoreView view(r.store(), "");
   ASSERT_EQ(view.info().times.size(), 6u);
   EXPECT_EQ(view.info().fields, std::vector<std::string>{"T"});
   EXPECT_EQ(view.info().lighting, "none");
@@ -168,6 +169,14 @@ TEST(StoreView, BadRequestsAndStoresAreClearErrors) {
   EXPECT_THROW(view.render(bad_tf), Error);
   EXPECT_NO_THROW(view.render(at(0, 0)));  // still serving after the refusals
   EXPECT_THROW(StoreView((r.tmp.path / "nowhere").string(), r.config), Error);
+  fs::remove(r.tmp.path / "store" / "config.json");
+  try {
+    StoreView kept(r.store(), "");
+    ADD_FAILURE() << "a store without config.json was opened without a config";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--config"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(StoreView((r.tmp.path / "store" / "segment-000").string(), r.config));
   std::string other = r.config;
   other.replace(other.find(R"("name": "T")"), 11, R"("name": "P")");
   EXPECT_THROW(StoreView(r.store(), other), Error);

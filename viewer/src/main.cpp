@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// viewer/src/main.cpp -- penumbra-view DB [--store DIR --config FILE] [--host H] [--port N] | --export DB
+// viewer/src/main.cpp -- penumbra-view DB [--store DIR [--config FILE]] [--host H] [--port N] | --export DB
 #include <pthread.h>
 
 #include <csignal>
@@ -13,14 +13,14 @@
 namespace {
 
 const char* const kUsage =
-    "usage: penumbra-view DB [--store DIR --config FILE] [--host ADDRESS] [--port N]\n"
+    "usage: penumbra-view DB [--store DIR [--config FILE]] [--host ADDRESS] [--port N]\n"
     "       penumbra-view --export DB\n"
     "  Serves the Cinema image database DB to a browser: open the URL it prints (it carries a\n"
     "  per-session token, which keeps other users of the machine out). Listens on 127.0.0.1 and\n"
     "  a free port unless told otherwise. --export writes the page into DB (index.html, viewer/)\n"
-    "  so that any static file server shows it. With --store (the run's \"store\" directory) and\n"
-    "  --config (the config the run was given), the page also renders views that were never\n"
-    "  stored: any camera, transfer function and stored step.\n";
+    "  so that any static file server shows it. With --store (the run's \"store\" directory, which\n"
+    "  keeps the run's config; --config names another), the page also renders views that were\n"
+    "  never stored: any camera, transfer function and stored step.\n";
 
 // SIGINT and SIGTERM are taken by a thread that waits for them (sigwait), so that stopping the
 // server happens outside a signal handler.
@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
       }
     }
     if (db.empty()) throw std::invalid_argument("DB");
-    if (options.store.empty() != options.config.empty()) throw std::invalid_argument("--store and --config go together");
+    if (options.store.empty() && !options.config.empty()) throw std::invalid_argument("--config needs --store");
     options.database = db;
   } catch (const std::exception&) {
     std::cerr << kUsage;

@@ -96,8 +96,6 @@ struct StoreView::Impl {
 };
 
 void StoreView::Impl::open_store(const std::string& store) {
-  if (!std::filesystem::is_directory(store))
-    throw Error(ErrorCode::io_error, "penumbra-view: the store '" + store + "' is not a directory");
   for (const std::string& dir : replay::store_segments(store)) {
     first_step.push_back(info.times.size());
     auto& seg = *segments.emplace_back(std::make_unique<replay::StoredSegment>(dir));
@@ -233,9 +231,23 @@ void StoreView::Impl::drop_lighting() {
   light_keys.assign(config.fields.size(), "");
 }
 
+namespace {
+
+// The config a store keeps beside its segments (a segment's own folder is inside the store).
+std::string kept_config(const std::string& store) {
+  for (const auto& dir : {std::filesystem::path(store), std::filesystem::path(store).parent_path()})
+    if (std::filesystem::is_regular_file(dir / "config.json")) return (dir / "config.json").string();
+  throw Error(ErrorCode::io_error, "penumbra-view: the store '" + store +
+                                       "' keeps no config.json (a run's store writes one); pass the run's config with --config");
+}
+
+}  // namespace
+
 StoreView::StoreView(const std::string& store, const std::string& config) : m_impl(std::make_unique<Impl>()) {
   Impl& im = *m_impl;
-  im.config = insitu::parse_config(config);
+  if (!std::filesystem::is_directory(store))
+    throw Error(ErrorCode::io_error, "penumbra-view: the store '" + store + "' is not a directory");
+  im.config = insitu::parse_config(config.empty() ? kept_config(store) : config);
   insitu::check_config_rules(im.config);
   im.open_store(store);
   im.info.fields = insitu::field_labels(im.config);

@@ -46,7 +46,8 @@ struct RenderedView {
 
 /// Renders views of a stored run (a store directory or one segment, serial or written over
 /// ranks) with the run's config (its fields, transfer functions, lighting, image size and
-/// background), on the CPU ray caster. Keeps the prepared mesh of the segment in use, the last
+/// background: `config`, a path or JSON text, or when empty the config.json the store keeps), on
+/// the CPU ray caster. Keeps the prepared mesh of the segment in use, the last
 /// step's field values and each field's lighting: a new camera re-renders only; a new step or
 /// transfer function solves the light again from the last solution (warm start). Not thread-safe:
 /// one caller at a time (RenderQueue). Throws penumbra::Error naming what is wrong.

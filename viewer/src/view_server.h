@@ -13,8 +13,8 @@ struct ViewOptions {
   std::string host = "127.0.0.1";  ///< the address to listen on
   int port = 0;                    ///< 0: a free port
   std::string token;               ///< empty: a new random one (session_token.h)
-  /// The run's store and the config it ran with: views it never stored are rendered from them
-  /// (render_routes.h). Empty: the database's images only.
+  /// The run's store and the config it ran with (empty: the one the store keeps): views it never
+  /// stored are rendered from them (render_routes.h). No store: the database's images only.
   std::string store, config;
   std::size_t render_queue = 8;  ///< render requests that may wait at once
 };
