@@ -6,7 +6,8 @@
 
 const dbBase = document.querySelector('meta[name="pnb-db-base"]').content;
 const live = document.querySelector('meta[name="pnb-live"]').content === "true";
-const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null };
+// free: the free camera (free_view.js) shows views rendered from the store instead of the rows.
+const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null, free: false };
 
 // data.csv as rows of fields (RFC 4180: quoted fields, "" inside quotes).
 function parseCsv(text) {
@@ -85,6 +86,7 @@ function preload(row) {
 
 // Shows the state's image once it has loaded, so the old one stays until then (no flicker).
 function show(changed) {
+  if (view.free) return;
   const row = rowFor(view.state, changed);
   if (!row) { showMessage("The database lists no images yet."); return; }
   view.columns.forEach((name, c) => { view.state[name] = row[c]; });
@@ -217,16 +219,19 @@ function setupDrag() {
   img.addEventListener("pointerdown", (e) => { from = { x: e.clientX, y: e.clientY }; img.setPointerCapture(e.pointerId); });
   img.addEventListener("pointerup", () => { from = null; });
   img.addEventListener("pointermove", (e) => {
-    if (!from) return;
+    if (!from || view.free) return;
     const dx = e.clientX - from.x, dy = e.clientY - from.y;
     if (Math.abs(dx) >= 24 && view.values.phi) { step("phi", dx > 0 ? -1 : 1); from.x = e.clientX; }
     if (Math.abs(dy) >= 24 && view.values.theta) { step("theta", dy > 0 ? 1 : -1); from.y = e.clientY; }
   });
 }
 
+// Keys typed into a text field or the transfer-function editor are the field's, not the view's.
+const typingInto = (el) => el.tagName === "TEXTAREA" || (el.tagName === "INPUT" && ["search", "number", "text"].includes(el.type));
+
 function setupKeys() {
   document.addEventListener("keydown", (e) => {
-    if (e.target.tagName === "INPUT" && e.target.type === "search") return;
+    if (view.free || typingInto(e.target)) return;
     const keys = { ArrowLeft: ["time", -1], ArrowRight: ["time", 1], ArrowUp: ["theta", 1], ArrowDown: ["theta", -1],
                    "[": ["phi", -1], "]": ["phi", 1] };
     if (keys[e.key]) { e.preventDefault(); step(...keys[e.key]); }
@@ -267,6 +272,8 @@ async function load() {
 setupDrag();
 setupKeys();
 document.getElementById("filter").addEventListener("input", filterTable);
+// The page's policy forbids inline handlers: the controls' form never submits.
+document.getElementById("controls").addEventListener("submit", (e) => e.preventDefault());
 window.addEventListener("hashchange", () => { readHash(); show(view.columns[0]); });
 load();
 if (live) setInterval(load, 2000);
