@@ -4,7 +4,7 @@
 # threads at once with ThreadSanitizer and runs them; any data race or lock-order report fails
 # the run. That code: the thread pool, the pager's background loads and its page recycling, the
 # streaming encoder's background thread, the field files those two meet in, and the in-situ
-# context (its store and kill-safe writes). The decoders' and renderers' own tests are left to the
+# context (its store and kill-safe writes), and penumbra-view's server where it is built. The decoders' and renderers' own tests are left to the
 # other builds: they reach threads only through the pool, which its own tests cover here, and
 # would take many minutes more under the sanitizer.
 # Needs what scripts/setup.sh installs. BUILD_DIR defaults to build-tsan.
@@ -29,9 +29,14 @@ flags="-fsanitize=thread -fno-omit-frame-pointer"
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_FLAGS="$flags" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=thread" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=thread"
-cmake --build "$build" --target penumbra_core_tests penumbra_compression_tests penumbra_insitu_tests
+targets=(penumbra_core_tests penumbra_compression_tests penumbra_insitu_tests)
+# penumbra-view's server: its request threads, the render queue's worker, the pages' events.
+viewer=$(grep -q '^PNB_ENABLE_VIEWER:BOOL=ON' "$build/CMakeCache.txt" && echo yes || true)
+[ -n "$viewer" ] && targets+=(penumbra_viewer_tests)
+cmake --build "$build" --target "${targets[@]}"
 export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1"
 "$build/tests/unit/core/penumbra_core_tests" --gtest_filter='ThreadPool.*:-ThreadPool.AForkedChildStillRunsOnSeveralThreads'
 "$build/tests/unit/compression/penumbra_compression_tests" --gtest_filter='Pager.*:StreamingEncoder.*:FieldFile.*'
 "$build/tests/unit/insitu/penumbra_insitu_tests"
+if [ -n "$viewer" ]; then "$build/tests/viewer/penumbra_viewer_tests"; fi
 echo "thread_sanitize.sh: no report"
