@@ -3,10 +3,10 @@
 # scripts/thread_sanitize.sh [BUILD_DIR] -- builds the tests of the code that runs on several
 # threads at once with ThreadSanitizer and runs them; any data race or lock-order report fails
 # the run. That code: the thread pool, the pager's background loads and its page recycling, the
-# streaming encoder's background thread, the field files those two meet in, and the in-situ
-# context (its store and kill-safe writes), and penumbra-view's server where it is built. The decoders' and renderers' own tests are left to the
-# other builds: they reach threads only through the pool, which its own tests cover here, and
-# would take many minutes more under the sanitizer.
+# streaming encoder's background thread, the field files those two meet in, the in-situ context
+# (its store and kill-safe writes), and penumbra-view's server where it is built. The decoders'
+# and renderers' own tests are left to the other builds: they reach threads only through the
+# pool, which its own tests cover here, and would take many minutes more under the sanitizer.
 # Needs what scripts/setup.sh installs. BUILD_DIR defaults to build-tsan.
 #
 # One test is left out, for a reason of the tool: ThreadPool.AForkedChildStillRunsOnSeveralThreads
