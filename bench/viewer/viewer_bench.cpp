@@ -39,6 +39,7 @@
 #include "penumbra/penumbra.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "scene_c_api.h"
 #include "view_server.h"
 
 namespace pb = penumbra::bench;
@@ -96,16 +97,8 @@ double run_in_situ(const pb::Scene& scene, const std::string& dir, const std::st
   pb::Stopwatch clock;
   pnb_context ctx = nullptr;
   check(pnb_create(config.c_str(), &ctx), nullptr, "pnb_create");
-  pnb_mesh_desc mesh PNB_MESH_DESC_INIT;
+  pnb_mesh_desc mesh = pb::scene_mesh_desc(scene);
   mesh.points = scene.points.data();
-  mesh.point_count = static_cast<int64_t>(scene.point_count());
-  mesh.point_type = PNB_FLOAT64;
-  mesh.connectivity = scene.tets.data();
-  mesh.connectivity_count = static_cast<int64_t>(scene.tets.size());
-  mesh.index_type = PNB_INT64;
-  static const std::uint8_t kTetra = 10;
-  mesh.cell_types = &kTetra;
-  mesh.cell_types_count = 1;
   mesh.topology_version = 1;
   penumbra::Bounds b;
   for (std::size_t i = 0; i < scene.point_count(); ++i)
