@@ -17,17 +17,6 @@
 namespace penumbra::replay {
 namespace {
 
-// The segments of a store directory in order, or `path` itself when it is a segment.
-std::vector<std::string> segments_of(const std::string& path) {
-  if (std::filesystem::exists(path + "/mesh.pnbm") || std::filesystem::exists(path + "/parts.txt")) return {path};
-  std::vector<std::string> segments;
-  for (const auto& e : std::filesystem::directory_iterator(path))
-    if (e.path().filename().string().rfind("segment-", 0) == 0) segments.push_back(e.path().string());
-  std::sort(segments.begin(), segments.end());
-  if (segments.empty()) throw Error(ErrorCode::io_error, "'" + path + "' holds no stored segment");
-  return segments;
-}
-
 // A piece's mesh as the C API takes it.
 pnb_mesh_desc mesh_desc(const StorePiece& piece, std::uint64_t version) {
   pnb_mesh_desc mesh PNB_MESH_DESC_INIT;
@@ -145,7 +134,7 @@ int replay_store(const std::string& config, const std::string& path, const std::
   std::vector<std::unique_ptr<StoredSegment>> segments;
   std::size_t total = 0;
   try {
-    for (const std::string& segment : segments_of(path)) segments.push_back(std::make_unique<StoredSegment>(segment));
+    for (const std::string& segment : store_segments(path)) segments.push_back(std::make_unique<StoredSegment>(segment));
     leave_out_superseded(segments);
     for (const auto& s : segments) total += s->step_count();
   } catch (const Error& e) {

@@ -9,6 +9,17 @@
 #include "penumbra/core/error.h"
 
 namespace penumbra::replay {
+
+std::vector<std::string> store_segments(const std::string& path) {
+  if (std::filesystem::exists(path + "/mesh.pnbm") || std::filesystem::exists(path + "/parts.txt")) return {path};
+  std::vector<std::string> segments;
+  for (const auto& e : std::filesystem::directory_iterator(path))
+    if (e.path().filename().string().rfind("segment-", 0) == 0) segments.push_back(e.path().string());
+  std::sort(segments.begin(), segments.end());
+  if (segments.empty()) throw Error(ErrorCode::io_error, "'" + path + "' holds no stored segment");
+  return segments;
+}
+
 namespace {
 
 // The part folders of a segment written over ranks, in order; empty for a serial segment.

@@ -11,6 +11,10 @@
 
 namespace penumbra::replay {
 
+/// The segments of a store directory in order, or `path` itself when it is a segment. Throws
+/// Error(io_error) when it holds none.
+std::vector<std::string> store_segments(const std::string& path);
+
 /// One segment of a store: a serial segment (mesh.pnbm) is one part; a segment written over
 /// ranks (FieldStore: `part-RRRRR` folders and `parts.txt`) has one part per rank. Its steps are
 /// those every part holds (the shortest part's, when a run died mid-window).

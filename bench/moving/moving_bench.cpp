@@ -40,6 +40,7 @@
 #include "penumbra/penumbra.h"
 #include "penumbra/render/image.h"
 #include "scene.h"
+#include "scene_c_api.h"
 
 namespace pb = penumbra::bench;
 namespace fs = std::filesystem;
@@ -92,14 +93,7 @@ struct Run {
   Run(const pb::Scene& scene, const std::vector<double>& values, const std::string& d, const std::string& cfg) : dir(d) {
     fs::remove_all(dir);
     check(pnb_create(cfg.c_str(), &ctx), nullptr, "pnb_create");
-    mesh.point_count = static_cast<int64_t>(scene.point_count());
-    mesh.point_type = PNB_FLOAT64;
-    mesh.connectivity = scene.tets.data();
-    mesh.connectivity_count = static_cast<int64_t>(scene.tets.size());
-    mesh.index_type = PNB_INT64;
-    static const std::uint8_t kTetra = 10;
-    mesh.cell_types = &kTetra;
-    mesh.cell_types_count = 1;
+    mesh = pb::scene_mesh_desc(scene);
     field.name = "scalar";
     field.values = values.data();
     field.count = static_cast<int64_t>(values.size());

@@ -3,7 +3,8 @@
 //
 // It builds a tet mesh of an L-shaped slab with a square through-hole (a non-convex domain:
 // rays leave and re-enter it), then advects a hot blob around the hole while it diffuses, and
-// hands every step to Penumbra, which renders some of them into a Cinema database.
+// hands every step to Penumbra, which renders some of them into a Cinema database and keeps
+// their history compressed in OUTPUT_DIR/store, from which penumbra-view renders new views.
 // Usage: penumbra-example-advection [OUTPUT_DIR]   (default ./penumbra-example-db)
 #include <algorithm>
 #include <chrono>
@@ -138,7 +139,8 @@ std::string config_json(const std::string& out) {
       "absorption": 0.08, "scattering": 0.5, "level0_resolution": 48,
       "phong": {"ambient": 0.75, "diffuse": 0.35, "specular": 0.15}
     },
-    "trigger": {"every_cycles": )" + std::to_string(kEvery) + R"(}
+    "trigger": {"every_cycles": )" + std::to_string(kEvery) + R"(},
+    "store": {"directory": ")" + out + R"(/store", "every_cycles": )" + std::to_string(kEvery) + R"(, "window": 8}
   })";
 }
 
@@ -202,6 +204,8 @@ int main(int argc, char** argv) {
   std::printf("penumbra-example-advection: %zu tets (L-shaped slab with a hole), %d cycles, %d rendered steps x %d cameras\n",
               mesh.tets.size() / 4, cycles + 1, kRenderedSteps, kCameras);
   std::printf("  Cinema database: %s/data.csv\n", out.c_str());
+  std::printf("  field history: %s/store (new views: penumbra-view %s --store %s/store)\n", out.c_str(), out.c_str(),
+              out.c_str());
   std::printf("  time in pnb_execute: %.0f ms (%.1f ms per image), total %.2f s\n", execute_ms,
               execute_ms / (kRenderedSteps * kCameras), total_s);
   return failures == 0 && fin == PNB_OK ? 0 : 1;

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "atomic_file.h"
 #include "penumbra/core/error.h"
 
 namespace penumbra::insitu {
@@ -34,44 +35,6 @@ std::string row_key(const std::vector<std::string>& values) {
   std::string k;
   for (const auto& v : values) k += csv_quote(v) + ",";
   return k;
-}
-
-/// Writes `text` to `path` durably: temp file in the same directory, fsync, rename, fsync dir.
-void write_file_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) io_fail("cannot create", tmp, errno);
-  std::size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int e = errno;
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      io_fail("cannot write", tmp, e);
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    const int e = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    io_fail("cannot flush", tmp, e);
-  }
-  ::close(fd);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int e = errno;
-    ::unlink(tmp.c_str());
-    io_fail("cannot rename into place", path, e);
-  }
-  // The rename itself must reach the disk for the new data.csv to survive a machine crash.
-  const std::string dir = fs::path(path).parent_path().string();
-  const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
 }
 
 /// True for "name.tmp.<pid>": a temporary file of an atomic write (ours or write_png's).

@@ -513,7 +513,9 @@ Config parse_config(const std::string& text_or_path) {
   } catch (const json::exception& e) {  // parse_error, or out_of_range for a number too large for a double
     throw Error(ErrorCode::invalid_argument, "config: " + source + " is not valid JSON: " + e.what());
   }
-  return parse_document(j);
+  Config config = parse_document(j);
+  config.text = std::move(text);
+  return config;
 }
 
 }  // namespace penumbra::insitu

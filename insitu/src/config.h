@@ -118,6 +118,9 @@ struct Config {
   /// view may take (RenderOptions::ray_runs_memory_bytes); a view that needs more fails on every
   /// rank, naming the rank.
   std::size_t runs_memory_bytes = std::size_t{2} << 30;
+  /// The JSON text parse_config read: a store keeps it as config.json, so that views of the run
+  /// can be rendered again later with the same fields, transfer functions and lighting.
+  std::string text;
 
   /// True when `name` is rendered by at least one field entry.
   bool uses_field(const std::string& name) const;

@@ -15,6 +15,8 @@
 #include <tuple>
 #include <utility>
 
+#include "atomic_file.h"
+#include "field_stages.h"
 #include "field_store.h"
 #include "ghost_cells.h"
 #include "penumbra/core/mesh_validation.h"
@@ -37,82 +39,6 @@ namespace penumbra::insitu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-/// The `lighting` column's value.
-std::string lighting_label(const LightingConfig& l) {
-  if (l.occlusion_model) return "occlusion";
-  switch (l.model) {
-    case render::LightingModel::none: return "none";
-    case render::LightingModel::phong: return "phong";
-    case render::LightingModel::light_volume: return "light-volume";
-  }
-  return "none";
-}
-
-bool lit(const Config& c) { return c.lighting && c.lighting->model != render::LightingModel::none; }
-
-/// Shading of a frame; `light_rgb` is the light volume's field for model light-volume.
-render::Shading shading_of(const LightingConfig& l, const std::vector<float>* light_rgb) {
-  render::Shading s;
-  s.model = l.model;
-  s.light_rgb = light_rgb;
-  s.ambient = l.ambient;
-  s.diffuse = l.diffuse;
-  s.specular = l.specular;
-  s.shininess = l.shininess;
-  // The key light for the diffuse and specular terms: the first directional light, seen from
-  // the lit side (towards the light); a headlight when there is none.
-  for (const render::Light& light : l.lights)
-    if (light.kind == render::Light::Kind::directional) {
-      s.light_direction = -normalize(light.vector);
-      break;
-    }
-  return s;
-}
-
-/// The `field` column per config entry: the field name, made unique with the component when
-/// one field is rendered several ways.
-std::vector<std::string> field_labels(const Config& c) {
-  std::vector<std::string> labels;
-  for (const auto& f : c.fields) {
-    int uses = 0;
-    for (const auto& g : c.fields) uses += g.name == f.name;
-    if (uses == 1) labels.push_back(f.name);
-    else if (f.mode == ComponentMode::magnitude) labels.push_back(f.name + "_magnitude");
-    else labels.push_back(f.name + "_c" + std::to_string(f.component));
-  }
-  return labels;
-}
-
-/// The data range of field `f` on this rank's values, before the ranks agree on it: the config's
-/// range, else the values' finite range (empty, lo > hi, when none is finite).
-std::pair<double, double> local_range(const FieldConfig& f, const std::vector<double>& values) {
-  if (f.range) return *f.range;
-  const ValueRange r = finite_range(values);
-  if (r.finite_count == 0) return {HUGE_VAL, -HUGE_VAL};
-  return {r.lo, r.hi};
-}
-
-/// The data range a field maps to [0, 1]: `lo`..`hi`, or where they are equal (a constant field)
-/// or empty (no finite value), a range widened around the value so that it sits inside instead
-/// of dividing by zero (any half-width works; this one is at least the value's own size, and an
-/// end beyond the largest double is held at it).
-std::pair<double, double> usable_range(double lo, double hi) {
-  if (hi > lo) return {lo, hi};
-  if (lo > hi) lo = 0;  // no finite value anywhere
-  const double h = 0.5 * std::max(1.0, std::fabs(lo)), largest = std::numeric_limits<double>::max();
-  return {std::max(lo - h, -largest), std::min(lo + h, largest)};
-}
-
-/// Transfer function of `f` over the step's normalised values (x in [0, 1] over [lo, hi]) with
-/// extinction per world unit.
-render::TransferFunction resolve_transfer_function(const FieldConfig& f, double lo, double hi, double diagonal) {
-  render::TransferFunction tf = f.transfer_function;
-  if (f.x_units == XUnits::data) tf.normalize_x(lo, hi);
-  if (f.opacity_unit == OpacityUnit::diagonal && diagonal > 0)
-    for (auto& o : tf.opacities) o.a /= diagonal;
-  return tf;
-}
 
 void log_line(const std::string& line) { std::fprintf(stderr, "penumbra: %s\n", line.c_str()); }
 
@@ -237,7 +163,11 @@ Context::Context(Config config, std::shared_ptr<RankGroup> group)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
   if (m_group->rank() == 0) m_writer = std::make_unique<ImageWriter>(m_config);
-  if (m_config.store) m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
+  if (m_config.store) {
+    m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
+    if (m_group->rank() == 0 && !m_config.text.empty())
+      write_file_atomic(m_config.store->directory + "/config.json", m_config.text, "store");
+  }
 }
 
 Context::~Context() = default;

@@ -29,7 +29,16 @@ void png_error_handler(png_structp png, png_const_charp msg) {
 }
 void png_warning_handler(png_structp, png_const_charp) {}
 
-bool encode(std::FILE* f, const std::vector<unsigned char>& rgb, int w, int h, std::string& err) {
+// Appends what libpng writes to the std::vector<unsigned char> its io pointer names.
+void append_to_vector(png_structp png, png_bytep data, png_size_t length) {
+  auto* out = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));
+  out->insert(out->end(), data, data + length);
+}
+void no_flush(png_structp) {}
+
+// Encodes into `f`, or, with `f` null, into `memory`.
+bool encode(std::FILE* f, std::vector<unsigned char>* memory, const std::vector<unsigned char>& rgb, int w, int h,
+            std::string& err) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &err, png_error_handler, png_warning_handler);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -37,7 +46,8 @@ bool encode(std::FILE* f, const std::vector<unsigned char>& rgb, int w, int h, s
     png_destroy_write_struct(&png, info ? &info : nullptr);
     return false;
   }
-  png_init_io(png, f);
+  if (f) png_init_io(png, f);
+  else png_set_write_fn(png, memory, append_to_vector, no_flush);
   // Speed over size: image databases are written every step inside the solver's loop.
   png_set_compression_level(png, 3);
   png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), 8, PNG_COLOR_TYPE_RGB,
@@ -80,7 +90,7 @@ void write_png(const std::string& path, const std::vector<unsigned char>& rgb, i
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) io_fail("cannot create", tmp);
   std::string err;
-  const bool ok = encode(f, rgb, width, height, err);
+  const bool ok = encode(f, nullptr, rgb, width, height, err);
   // fflush + fsync before rename: a crash must leave either the old file or the complete new one.
   const bool flushed = ok && std::fflush(f) == 0 && ::fsync(fileno(f)) == 0;
   const int saved = errno;
@@ -97,6 +107,15 @@ void write_png(const std::string& path, const std::vector<unsigned char>& rgb, i
     errno = e;
     io_fail("cannot rename into place", path);
   }
+}
+
+std::vector<unsigned char> encode_png(const std::vector<unsigned char>& rgb, int width, int height) {
+  require(width > 0 && height > 0 && rgb.size() == static_cast<std::size_t>(width) * height * 3,
+          "encode_png: buffer size does not match " + std::to_string(width) + "x" + std::to_string(height));
+  std::vector<unsigned char> png;
+  std::string err;
+  if (!encode(nullptr, &png, rgb, width, height, err)) throw Error(ErrorCode::io_error, "cannot encode PNG: " + err);
+  return png;
 }
 
 std::vector<unsigned char> read_png_rgb(const std::string& path, int& width, int& height) {

@@ -81,7 +81,7 @@ struct Running {
   ViewServer server;
   std::thread thread;
   explicit Running(const fs::path& db, bool event_stream = true)
-      : server(ViewOptions{db, "127.0.0.1", 0, "", event_stream}), thread([this] { server.run(); }) {
+      : server(ViewOptions{.database = db, .event_stream = event_stream}), thread([this] { server.run(); }) {
     httplib::Client probe("127.0.0.1", server.port());
     for (int i = 0; i < 200 && !probe.Get("/"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }

@@ -8,7 +8,8 @@
 const dbBase = document.querySelector('meta[name="pnb-db-base"]').content;
 const live = document.querySelector('meta[name="pnb-live"]').content === "true";
 const events = document.querySelector('meta[name="pnb-events"]').content === "true";
-const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null, zoom: 1 };
+// free: the free camera (free_view.js) shows views rendered from the store instead of the rows.
+const view = { columns: [], rows: [], values: {}, state: {}, csvText: null, playing: null, free: false, zoom: 1 };
 
 // data.csv as rows of fields (RFC 4180: quoted fields, "" inside quotes).
 function parseCsv(text) {
@@ -87,6 +88,7 @@ function preload(row) {
 
 // Shows the state's image once it has loaded, so the old one stays until then (no flicker).
 function show(changed) {
+  if (view.free) return;
   const row = rowFor(view.state, changed);
   if (!row) { showMessage("The database lists no images yet."); return; }
   view.columns.forEach((name, c) => { view.state[name] = row[c]; });
@@ -220,16 +222,19 @@ function setupDrag() {
   img.addEventListener("pointerdown", (e) => { from = { x: e.clientX, y: e.clientY }; img.setPointerCapture(e.pointerId); });
   img.addEventListener("pointerup", () => { from = null; });
   img.addEventListener("pointermove", (e) => {
-    if (!from) return;
+    if (!from || view.free) return;
     const dx = e.clientX - from.x, dy = e.clientY - from.y;
     if (Math.abs(dx) >= 24 && view.values.phi) { step("phi", dx > 0 ? -1 : 1); from.x = e.clientX; }
     if (Math.abs(dy) >= 24 && view.values.theta) { step("theta", dy > 0 ? 1 : -1); from.y = e.clientY; }
   });
 }
 
+// Keys typed into a text field or the transfer-function editor are the field's, not the view's.
+const typingInto = (el) => el.tagName === "TEXTAREA" || (el.tagName === "INPUT" && ["search", "number", "text"].includes(el.type));
+
 function setupKeys() {
   document.addEventListener("keydown", (e) => {
-    if (e.target.tagName === "INPUT" && e.target.type === "search") return;
+    if (view.free || typingInto(e.target)) return;
     const keys = { ArrowLeft: ["time", -1], ArrowRight: ["time", 1], ArrowUp: ["theta", 1], ArrowDown: ["theta", -1],
                    "[": ["phi", -1], "]": ["phi", 1] };
     if (keys[e.key]) { e.preventDefault(); step(...keys[e.key]); }
@@ -238,7 +243,8 @@ function setupKeys() {
 }
 
 // The 3D mouse (penumbra-view's /events): its motion comes in small amounts (degrees, time steps),
-// which add up until they reach the neighbouring stored value, as a drag steps every 24 pixels.
+// which add up until they reach the neighbouring stored value, as a drag steps every 24 pixels; in
+// the free camera they turn, zoom and step the rendered view directly.
 const motion = { phi: 0, theta: 0, time: 0, last: 0 };
 const kMotionPause = 400;   // ms without motion after which what had added up is dropped
 const kFallbackGap = 30;    // degrees between values that are not numbers
@@ -269,9 +275,10 @@ function moveBy(name, amount) {
   }
 }
 
+// The stored images' zoom scales the image; the free camera zooms its own camera instead.
 function setZoom(zoom) {
   view.zoom = Math.min(kMaxZoom, Math.max(1, zoom));
-  document.getElementById("image").style.transform = view.zoom === 1 ? "" : "scale(" + view.zoom + ")";
+  document.getElementById("image").style.transform = view.zoom === 1 || view.free ? "" : "scale(" + view.zoom + ")";
 }
 
 // Button 1: the first row's orbit, unzoomed, the other columns as they are.
@@ -282,10 +289,21 @@ function resetView() {
   show(view.values.phi ? "phi" : view.columns[0]);
 }
 
+// Whole steps of the free camera's stored steps, the rest kept for the next motion.
+function freeMotion(e) {
+  motion.time += e.d_time;
+  const steps = Math.trunc(motion.time);
+  motion.time -= steps;
+  const first = (name, fallback) => (view.values[name] ? Number(view.rows[0][view.columns.indexOf(name)]) : fallback);
+  const from = e.reset_view ? { phi: first("phi", free.phi), theta: first("theta", free.theta), zoom: 1 } : free;
+  moveFree({ phi: from.phi + e.d_phi, theta: from.theta + e.d_theta, zoom: from.zoom * e.zoom, step: free.step + steps });
+}
+
 function applyMotion(e) {
   const now = performance.now();
   if (now - motion.last > kMotionPause) motion.phi = motion.theta = motion.time = 0;
   motion.last = now;
+  if (view.free) { freeMotion(e); return; }
   if (view.rows.length === 0) return;
   if (e.reset_view) resetView();
   if (e.toggle_play) togglePlay();
@@ -341,6 +359,8 @@ async function load() {
 setupDrag();
 setupKeys();
 document.getElementById("filter").addEventListener("input", filterTable);
+// The page's policy forbids inline handlers: the controls' form never submits.
+document.getElementById("controls").addEventListener("submit", (e) => e.preventDefault());
 window.addEventListener("hashchange", () => { readHash(); show(view.columns[0]); });
 load();
 if (live) setInterval(load, 2000);

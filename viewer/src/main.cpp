@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// viewer/src/main.cpp -- penumbra-view DB [--host H] [--port N] [--spacemouse ...] | penumbra-view --export DB
+// viewer/src/main.cpp -- penumbra-view DB [--store DIR [--config FILE]] [--host H] [--port N]
+// [--spacemouse ...] | --export DB
 #include <pthread.h>
 
 #include <csignal>
@@ -18,20 +19,21 @@ namespace {
 using namespace penumbra::viewer;
 
 const char* const kUsage =
-    "usage: penumbra-view DB [--host ADDRESS] [--port N] [--spacemouse on|off]\n"
-    "                        [--spacemouse-sensitivity X] [--spacemouse-deadzone N]\n"
+    "usage: penumbra-view DB [--store DIR [--config FILE]] [--host ADDRESS] [--port N]\n"
+    "                        [--spacemouse on|off] [--spacemouse-sensitivity X] [--spacemouse-deadzone N]\n"
     "       penumbra-view --export DB\n"
     "  Serves the Cinema image database DB to a browser: open the URL it prints (it carries a\n"
     "  per-session token, which keeps other users of the machine out). Listens on 127.0.0.1 and\n"
     "  a free port unless told otherwise. --export writes the page into DB (index.html, viewer/)\n"
-    "  so that any static file server shows it.\n"
+    "  so that any static file server shows it. With --store (the run's \"store\" directory, which\n"
+    "  keeps the run's config; --config names another), the page also renders views that were\n"
+    "  never stored: any camera, transfer function and stored step.\n"
     "  A 3D mouse (3Dconnexion, over USB) orbits, zooms and moves time in every open page unless\n"
     "  --spacemouse off; sensitivity (0, 10], default 1; dead zone in device units [0, 350),\n"
     "  default 15. viewer/README.md has the udev rule it needs.\n";
 
 struct Options {
-  std::string db, host = "127.0.0.1";
-  int port = 0;
+  ViewOptions view;
   bool do_export = false;
   bool spacemouse = true;
   MappingSettings mapping;
@@ -45,16 +47,21 @@ bool on_off(const std::string& value) {
 
 Options parse(int argc, char** argv) {
   Options o;
+  std::string db;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
     if (a == "--export") {
       o.do_export = true;
     } else if (a == "--host" && has_value) {
-      o.host = argv[++i];
+      o.view.host = argv[++i];
     } else if (a == "--port" && has_value) {
-      o.port = std::stoi(argv[++i]);
-      if (o.port < 0 || o.port > 65535) throw std::invalid_argument("port");
+      o.view.port = std::stoi(argv[++i]);
+      if (o.view.port < 0 || o.view.port > 65535) throw std::invalid_argument("port");
+    } else if (a == "--store" && has_value) {
+      o.view.store = argv[++i];
+    } else if (a == "--config" && has_value) {
+      o.view.config = argv[++i];
     } else if (a == "--spacemouse" && has_value) {
       o.spacemouse = on_off(argv[++i]);
     } else if (a == "--spacemouse-sensitivity" && has_value) {
@@ -63,13 +70,15 @@ Options parse(int argc, char** argv) {
       o.mapping.dead_zone = std::stoi(argv[++i]);
     } else if (a == "--spacemouse-script" && has_value) {
       o.script = argv[++i];
-    } else if (o.db.empty() && a.rfind("--", 0) != 0) {
-      o.db = a;
+    } else if (db.empty() && a.rfind("--", 0) != 0) {
+      db = a;
     } else {
       throw std::invalid_argument(a);
     }
   }
-  if (o.db.empty()) throw std::invalid_argument("DB");
+  if (db.empty()) throw std::invalid_argument("DB");
+  if (o.view.store.empty() && !o.view.config.empty()) throw std::invalid_argument("--config needs --store");
+  o.view.database = db;
   return o;
 }
 
@@ -90,7 +99,7 @@ std::unique_ptr<SpaceMouseTransport> spacemouse_transport(const Options& o, Scri
 
 // SIGINT and SIGTERM are taken by a thread that waits for them (sigwait), so that stopping the
 // server happens outside a signal handler. With a report script, SIGUSR1 plugs its device in.
-int serve(const Options& o) {
+int serve(Options o) {
   ScriptedTransport* scripted = nullptr;
   auto transport = spacemouse_transport(o, scripted);
   sigset_t signals;
@@ -99,7 +108,8 @@ int serve(const Options& o) {
   sigaddset(&signals, SIGTERM);
   if (scripted) sigaddset(&signals, SIGUSR1);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  ViewServer server({o.db, o.host, o.port, "", transport != nullptr});
+  o.view.event_stream = transport != nullptr;
+  ViewServer server(o.view);
   std::unique_ptr<SpaceMouse> mouse;
   if (transport)
     mouse = std::make_unique<SpaceMouse>(
@@ -113,7 +123,8 @@ int serve(const Options& o) {
     while (sigwait(&signals, &signal) == 0 && signal == SIGUSR1) scripted->plug_in();
     server.stop();
   });
-  say("serving '" + o.db + "'; open\n  " + server.url());
+  say("serving '" + o.view.database.string() + "'" +
+      (o.view.store.empty() ? "" : " and views of the store '" + o.view.store + "'") + "; open\n  " + server.url());
   if (mouse) mouse->start();
   server.run();
   if (mouse) mouse->stop();
@@ -141,11 +152,11 @@ int main(int argc, char** argv) {
   try {
     check_settings(options.mapping);
     if (options.do_export) {
-      export_page(options.db);
-      say("wrote '" + options.db + "/index.html'");
+      export_page(options.view.database);
+      say("wrote '" + options.view.database.string() + "/index.html'");
       return 0;
     }
-    return serve(options);
+    return serve(std::move(options));
   } catch (const penumbra::Error& e) {
     std::cerr << e.what() << "\n";
     return e.code() == penumbra::ErrorCode::invalid_argument ? 2 : 1;

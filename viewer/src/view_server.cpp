@@ -11,6 +11,7 @@
 #include "assets.h"
 #include "event_hub.h"
 #include "penumbra/core/error.h"
+#include "render_routes.h"
 #include "request_path.h"
 #include "session_token.h"
 
@@ -71,6 +72,7 @@ struct ViewServer::Impl {
   int port = 0;
   std::string cookie_name;
   socket_t listening_socket = INVALID_SOCKET;
+  std::unique_ptr<RenderQueue> renders;  ///< with a store only
   EventHub events;
 
   bool allowed(const httplib::Request& req) const {
@@ -124,7 +126,8 @@ void ViewServer::Impl::routes() {
     res.set_content(read_file(*file), media_type(file->string()));
   });
   server.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) {
-    res.set_content("{\"database\": \"" + root.filename().string() + "\"}", "application/json");
+    res.set_content("{\"database\": \"" + root.filename().string() + "\", \"store\": " + (renders ? "true" : "false") + "}",
+                    "application/json");
   });
   if (options.event_stream) event_route();
 }
@@ -165,7 +168,12 @@ ViewServer::ViewServer(ViewOptions options) : m_impl(std::make_unique<Impl>()) {
   if (!std::filesystem::is_directory(im.options.database, ec))
     throw Error(ErrorCode::io_error, "penumbra-view: '" + im.options.database.string() + "' is not a directory");
   im.root = std::filesystem::canonical(im.options.database, ec);
+  if (!im.options.store.empty()) {
+    im.renders = std::make_unique<RenderQueue>(std::make_unique<StoreView>(im.options.store, im.options.config),
+                                               im.options.render_queue);
+  }
   im.routes();
+  if (im.renders) add_render_routes(im.server, *im.renders);
   im.server.set_socket_options([&im](socket_t sock) {
     httplib::default_socket_options(sock);
     im.listening_socket = sock;

@@ -2,6 +2,7 @@
 // viewer/src/view_server.h -- penumbra-view's HTTP server: the page and one database's files
 #pragma once
 #include <filesystem>
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -14,16 +15,21 @@ struct ViewOptions {
   std::string host = "127.0.0.1";  ///< the address to listen on
   int port = 0;                    ///< 0: a free port
   std::string token;               ///< empty: a new random one (session_token.h)
-  bool event_stream = true;        ///< serve /events (the 3D mouse's events and status)
+  /// The run's store and the config it ran with (empty: the one the store keeps): views it never
+  /// stored are rendered from them (render_routes.h). No store: the database's images only.
+  std::string store, config;
+  std::size_t render_queue = 8;  ///< render requests that may wait at once
+  bool event_stream = true;      ///< serve /events (the 3D mouse's events and status)
 };
 
 /// Serves, to requests that carry the session token (a `token` query parameter, or the cookie
 /// the page's first request sets): the page at `/`, its files at `/assets/NAME`, the database's
 /// files at `/db/PATH` (only regular files inside the database: request_path.h), `/api/info`,
-/// and, where `event_stream` is on, `/events`: what publish() and publish_status() send, as
-/// server-sent events to at most EventHub::kMaxSubscribers pages at once (503 beyond). Anything
-/// else, or a request without the token, gets 404 or 403 and nothing of the database. Every response forbids other origins' scripts and sends no referrer, so the token
-/// does not leave the page.
+/// with a store /api/store and /api/render (render_routes.h), and, where `event_stream` is on,
+/// `/events`: what publish() and publish_status() send, as server-sent events to at most
+/// EventHub::kMaxSubscribers pages at once (503 beyond). Anything else, or a request without the
+/// token, gets 404 or 403 and nothing of the database. Every response forbids other origins'
+/// scripts and sends no referrer, so the token does not leave the page.
 class ViewServer {
 public:
   /// Listens (on a free port when `port` is 0). Throws penumbra::Error(io_error) when the

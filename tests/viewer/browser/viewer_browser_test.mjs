@@ -2,15 +2,16 @@
 // tests/viewer/browser/viewer_browser_test.mjs -- penumbra-view in Debian's chromium, headless,
 // driven by playwright-core: the example's database shown pixel for pixel, time and orbit moved
 // through the controls and the keys, the state in the URL, a 3D mouse's recorded reports moving the
-// view, a live run's new rows, clear messages.
+// view, a live run's new rows, clear messages; with the run's store, a free camera rendered by the
+// server against penumbra-replay's offline render of the same camera and step.
 //
-// usage: node viewer_browser_test.mjs PENUMBRA_VIEW EXAMPLE_PROGRAM OUT_DIR [CHROMIUM]
+// usage: node viewer_browser_test.mjs PENUMBRA_VIEW EXAMPLE_PROGRAM OUT_DIR [CHROMIUM [PENUMBRA_REPLAY]]
 import { spawn, execFileSync } from "node:child_process";
 import fs from "node:fs";
 import path from "node:path";
 import { chromium } from "playwright-core";
 
-const [viewBin, exampleBin, outDir, chromiumPath = "/usr/bin/chromium"] = process.argv.slice(2);
+const [viewBin, exampleBin, outDir, chromiumPath = "/usr/bin/chromium", replayBin = "none"] = process.argv.slice(2);
 let failures = 0;
 function check(ok, what) {
   console.log((ok ? "ok   " : "FAIL ") + what);
@@ -34,8 +35,8 @@ const spacemouseScript = path.join(outDir, "spacemouse.script");
 fs.writeFileSync(spacemouseScript, "30 01 a2 fe 00 00 5e 01 00 00 00 00 a2 fe\n".repeat(36) + "30 01" + " 00".repeat(12) + "\n");
 
 // penumbra-view on a free port; the URL it prints carries the token.
-function startViewer(dir) {
-  const child = spawn(viewBin, [dir, "--spacemouse-script", spacemouseScript], { stdio: ["ignore", "pipe", "inherit"] });
+function startViewer(dir, extra = []) {
+  const child = spawn(viewBin, [dir, ...extra], { stdio: ["ignore", "pipe", "inherit"] });
   return new Promise((resolve, reject) => {
     let out = "";
     child.stdout.on("data", (d) => {
@@ -58,8 +59,8 @@ async function shownPixels(page) {
     return Array.from(c.getContext("2d").getImageData(0, 0, c.width, c.height).data);
   });
 }
-async function filePixels(page, file) {
-  const data = "data:image/png;base64," + fs.readFileSync(path.join(db, file)).toString("base64");
+async function filePixels(page, file, dir = db) {
+  const data = "data:image/png;base64," + fs.readFileSync(path.join(dir, file)).toString("base64");
   return page.evaluate(async (src) => {
     const img = new Image();
     img.src = src;
@@ -82,7 +83,7 @@ async function waitForFile(page, file) {
   await waitUntil(page, (f) => decodeURIComponent(document.getElementById("image").src).endsWith("/db/" + f), file, file);
 }
 
-const { child, url } = await startViewer(db);
+const { child, url } = await startViewer(db, ["--spacemouse-script", spacemouseScript]);
 // Without the background-networking flags chromium keeps trying hosts a closed network refuses.
 const browser = await chromium.launch({
   executablePath: chromiumPath,
@@ -97,6 +98,7 @@ try {
   await waitForFile(page, first.at(-1));
   check(samePixels(await shownPixels(page), await filePixels(page, first.at(-1))), "the first row's image, pixel for pixel");
   check((await page.locator("#controls select, #controls input").count()) >= header.length - 1, "one control per parameter column");
+  check((await page.locator("#free-panel").count()) === 0, "without a store, no free camera is offered");
 
   // Time by the key and by the slider; the state follows in the URL.
   await page.keyboard.press("ArrowRight");
@@ -165,8 +167,93 @@ try {
 } catch (e) {
   check(false, "browser session: " + e.message);
 } finally {
-  await browser.close();
   child.kill("SIGTERM");
+}
+try {
+  await freeCamera();
+} catch (e) {
+  check(false, "free camera session: " + e.message);
+} finally {
+  await browser.close();
+}
+
+// RMS difference of two RGBA pixel arrays over the colour channels, in percent of 255.
+function rmsPercent(a, b) {
+  let sum = 0, n = 0;
+  for (let i = 0; i < a.length; ++i) if (i % 4 !== 3) { sum += (a[i] - b[i]) ** 2; ++n; }
+  return (100 * Math.sqrt(sum / n)) / 255;
+}
+
+// The example's run again, with its store: the page's free camera at an angle the run never
+// stored, against penumbra-replay's render of the same camera and step from the same store.
+async function freeCamera() {
+  const db2 = path.join(outDir, "example-store-db");
+  execFileSync(exampleBin, [db2], { stdio: "ignore" });
+  const viewer = await startViewer(db2, ["--store", path.join(db2, "store"), "--spacemouse-script", spacemouseScript]);
+  try {
+    const page = await browser.newPage();
+    await page.goto(viewer.url);
+    await page.locator("#free-panel").waitFor({ timeout: 10000 });
+    check(true, "with a store, the free camera is offered");
+    await page.locator("#free-on").check();
+    await page.locator("#free-step").fill("5");
+    for (const [id, value] of [["#free-phi", "45"], ["#free-theta", "10"]]) {
+      await page.locator(id).fill(value);
+      await page.locator(id).dispatchEvent("change");
+    }
+    const settled = () => !free.inFlight && !free.again && document.getElementById("image").src.startsWith("blob:") &&
+      free.phi === 45 && free.theta === 10 && free.step === 5 && document.getElementById("free-timing").textContent !== "";
+    await waitUntil(page, settled, null, "the free camera's render");
+    await new Promise((r) => setTimeout(r, 300));
+    await waitUntil(page, settled, null, "the free camera's last render");
+    const shown = await shownPixels(page);
+    check(shown.length === 128 * 128 * 4, "the free camera shows a rendered 128x128 image");
+    if (replayBin === "none") {
+      console.log("skip the offline comparison: penumbra-replay was not built");
+    } else {
+      const config = JSON.parse(fs.readFileSync(path.join(db2, "store", "config.json"), "utf8"));
+      const offline = path.join(outDir, "offline-db");
+      fs.rmSync(offline, { recursive: true, force: true });
+      config.output = { directory: offline };
+      config.cameras = { phi: [45], theta: [10], fov: config.cameras.fov };
+      delete config.store;
+      execFileSync(replayBin, [JSON.stringify(config), path.join(db2, "store"), "--steps", "5:6", "--quiet"]);
+      const line = fs.readFileSync(path.join(offline, "data.csv"), "utf8").trim().split("\n")[1].split(",");
+      const rms = rmsPercent(shown, await filePixels(page, line.at(-1), offline));
+      console.log("free camera against penumbra-replay: RMS " + rms.toFixed(4) + " %");
+      // The same store, camera and transfer function; only the light's start differs (the viewer
+      // warm-starts from the step it showed before), and both converge to the light's tolerance.
+      check(rms < 0.1, "the free camera matches penumbra-replay's offline render of that camera (RMS < 0.1 %)");
+    }
+    // Another transfer function: fully transparent, the background alone.
+    await page.locator("#free-opacities").fill("0 0\n1 0");
+    await page.locator("#free-apply").click();
+    await waitUntil(page, () => !free.inFlight && !free.again && free.tf && free.tf.opacities[1][1] === 0, null, "the new transfer function");
+    await new Promise((r) => setTimeout(r, 300));
+    const blank = await shownPixels(page);
+    check(blank.every((v, i) => i % 4 === 3 || Math.abs(v - blank[i % 4]) <= 1), "a transparent transfer function shows the background alone");
+    // A bad transfer function is named in the page.
+    await page.locator("#free-opacities").fill("0 x");
+    await page.locator("#free-apply").click();
+    check((await page.locator("#message").textContent()).includes("opacities line 1"), "a malformed transfer function is named in the page");
+    // Back to the run's transfer function, for the README's picture of the page.
+    await page.locator("#free-reset").click();
+    await waitUntil(page, () => !free.inFlight && !free.again && free.tf === null, null, "the run's transfer function");
+    await new Promise((r) => setTimeout(r, 300));
+    await page.screenshot({ path: path.join(outDir, "viewer-free-camera.png") });
+    // The 3D mouse's reports turn the free camera by their degrees (97 to 162), zoom it and step it back.
+    await waitUntil(page, () => document.getElementById("device").textContent === "no 3D mouse found", null, "the 3D mouse's status");
+    const before = await page.evaluate(() => ({ phi: free.phi, theta: free.theta, zoom: free.zoom, step: free.step }));
+    viewer.child.kill("SIGUSR1");
+    await waitUntil(page, () => document.getElementById("device").textContent.includes("unplugged"), null, "the scripted 3D mouse");
+    const after = await page.evaluate(() => ({ phi: free.phi, theta: free.theta, zoom: free.zoom, step: free.step }));
+    const turned = ((after.phi - before.phi + 540) % 360) - 180;
+    check(turned > 90 && turned < 170 && after.theta === before.theta,
+          "twisting the 3D mouse turns the free camera by its degrees (" + turned.toFixed(1) + ")");
+    check(after.zoom > 1.5 * before.zoom && after.step < before.step, "pushing it down zooms the free camera in, sliding it left steps back");
+  } finally {
+    viewer.child.kill("SIGTERM");
+  }
 }
 console.log(failures === 0 ? "viewer browser test: ok" : "viewer browser test: " + failures + " failure(s)");
 process.exit(failures === 0 ? 0 : 1);

@@ -31,6 +31,10 @@ double rms_difference_pct(const std::vector<unsigned char>& a, const std::vector
 /// rename); throws penumbra::Error(io_error) naming the path when it cannot be written.
 void write_png(const std::string& path, const std::vector<unsigned char>& rgb, int width, int height);
 
+/// 8-bit RGB as the bytes of a PNG file (for answers over a network); throws Error(io_error)
+/// when libpng fails.
+std::vector<unsigned char> encode_png(const std::vector<unsigned char>& rgb, int width, int height);
+
 /// Reads an 8-bit RGB or RGBA PNG (alpha dropped); throws Error(io_error) on failure.
 std::vector<unsigned char> read_png_rgb(const std::string& path, int& width, int& height);
 
