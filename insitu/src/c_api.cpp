@@ -5,6 +5,7 @@
 #include <cstring>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "config.h"
 #include "c_api_internal.h"
@@ -16,6 +17,7 @@
 struct pnb_context_s {
   std::unique_ptr<penumbra::insitu::Context> context;
   std::string last_error;
+  std::vector<std::string> needed_fields;  ///< of the last pnb_step_needs
 };
 
 namespace {
@@ -25,7 +27,8 @@ namespace {
 // which an older caller leaves unset); these constants then keep the ABI-2 sizes.
 constexpr std::size_t kFirstMeshDescBytes = offsetof(pnb_mesh_desc, point_x);  // ABI 3 added the three arrays
 constexpr std::size_t kFirstFieldDescBytes = sizeof(pnb_field_desc);
-constexpr std::size_t kFirstStepStatsBytes = sizeof(pnb_step_stats);
+constexpr std::size_t kFirstStepStatsBytes = offsetof(pnb_step_stats, store_ms);  // ABI 5 added the stages
+constexpr std::size_t kFirstNeedsBytes = sizeof(pnb_needs);
 
 using penumbra::Error;
 using penumbra::ErrorCode;
@@ -248,8 +251,33 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
     stats.light_ms = s.light_ms;
     stats.light_residual = s.light.residual;
     stats.light_converged = s.light.converged ? 1 : 0;
+    stats.store_ms = s.store_ms;
+    stats.gather_ms = s.gather_ms;
+    stats.composite_ms = s.composite_ms;
+    stats.write_ms = s.write_ms;
+    stats.other_ms = s.other_ms;
     penumbra::insitu::write_sized(stats, out, kFirstStepStatsBytes, "pnb_last_step", "pnb_step_stats", "PNB_STEP_STATS_INIT");
   });
+}
+
+pnb_status pnb_step_needs(pnb_context ctx, double time, int64_t cycle, pnb_needs* out) {
+  if (!ctx) return null_context("pnb_step_needs");
+  return guarded(ctx, [&] {
+    penumbra::require(out != nullptr, "pnb_step_needs: out is NULL");
+    const penumbra::insitu::StepNeeds needs = ctx->context->step_needs(time, cycle);
+    pnb_needs answer PNB_NEEDS_INIT;
+    answer.renders = needs.renders ? 1 : 0;
+    answer.stores = needs.stores ? 1 : 0;
+    answer.needs_mesh = needs.mesh ? 1 : 0;
+    answer.field_count = static_cast<int>(needs.fields.size());
+    penumbra::insitu::write_sized(answer, out, kFirstNeedsBytes, "pnb_step_needs", "pnb_needs", "PNB_NEEDS_INIT");
+    ctx->needed_fields = needs.fields;
+  });
+}
+
+const char* pnb_needed_field(pnb_context ctx, int index) {
+  if (!ctx || index < 0 || static_cast<std::size_t>(index) >= ctx->needed_fields.size()) return nullptr;
+  return ctx->needed_fields[static_cast<std::size_t>(index)].c_str();
 }
 
 pnb_status pnb_finalize(pnb_context ctx) {

@@ -587,16 +587,22 @@ ImageLabels Context::labels_of(const ComposedImage& image, double time, std::int
 void Context::render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                            std::vector<CinemaDatabase::Row>& rows, double& render_ms) {
   StepField* step = nullptr;
+  const auto t_gather = Clock::now();
   agreed("pnb_execute", [&] { step = &gather_field(index, cycle, values); });  // gather
   normalize_field(index, *step);
+  m_last_step.gather_ms += ms_since(t_gather);
   const FieldConfig& f = m_config.fields[index];
   const render::TransferFunction tf = resolve_transfer_function(f, step->lo, step->hi, m_mesh->global_bounds.diagonal());
   std::vector<RenderedView> views;
   const render::RenderOptions options = prepare_lighting(index, *step, tf);
   agreed("pnb_execute", [&] { views = render_views(index, *step, tf, options, render_ms); });
   for (RenderedView& view : views) {
+    const auto t_composite = Clock::now();
     const std::optional<ComposedImage> image = composite(std::move(view));
+    const auto t_write = Clock::now();
+    m_last_step.composite_ms += std::chrono::duration<double, std::milli>(t_write - t_composite).count();
     if (image && m_writer) rows.push_back(m_writer->write(*image, labels_of(*image, time, cycle)));
+    m_last_step.write_ms += ms_since(t_write);
   }
 }
 
@@ -634,18 +640,19 @@ bool Context::execute(double time, std::int64_t cycle) {
   } drop{this};
   StepFailures failures;
   StepValues values(m_config.fields.size());
+  const auto t0 = Clock::now();
   // The history is kept on its own cadence, whether or not this step renders.
   if (m_store && m_store->records(cycle)) store_fields(time, cycle, values, failures);
+  const double store_ms = ms_since(t0);
   if (!trigger_fires(time, cycle)) {
     report(failures);
     return false;
   }
 
-  const auto t0 = Clock::now();
   std::vector<CinemaDatabase::Row> rows;
   double render_ms = 0;
-  m_last_step.light = {};
-  m_last_step.light_ms = 0;
+  m_last_step = {};
+  m_last_step.store_ms = store_ms;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     try {
       render_field(i, time, cycle, values, rows, render_ms);
@@ -656,18 +663,34 @@ bool Context::execute(double time, std::int64_t cycle) {
   }
   // Only images that were completely written are listed.
   if (m_writer) {
+    const auto t_commit = Clock::now();
     try {
       m_writer->commit(rows);
     } catch (const Error& e) {
       failures.add(e);
     }
+    m_last_step.write_ms += ms_since(t_commit);
   }
-  m_last_step.cycle = cycle;
-  m_last_step.images = static_cast<int>(rows.size());
-  m_last_step.render_ms = render_ms;
-  m_last_step.total_ms = ms_since(t0);
+  StepStats& s = m_last_step;
+  s.cycle = cycle;
+  s.images = static_cast<int>(rows.size());
+  s.render_ms = render_ms;
+  s.total_ms = ms_since(t0);
+  s.other_ms = std::max(0.0, s.total_ms - (s.store_ms + s.gather_ms + s.light_ms + s.render_ms + s.composite_ms + s.write_ms));
   report(failures);
   return true;
+}
+
+StepNeeds Context::step_needs(double time, std::int64_t cycle) const {
+  require_open("pnb_step_needs");
+  StepNeeds needs;
+  needs.renders = m_trigger.would_fire(time, cycle);
+  needs.stores = m_store && m_store->records(cycle);
+  needs.mesh = !m_mesh;
+  if (needs.renders || needs.stores)
+    for (const FieldConfig& f : m_config.fields)
+      if (std::find(needs.fields.begin(), needs.fields.end(), f.name) == needs.fields.end()) needs.fields.push_back(f.name);
+  return needs;
 }
 
 void Context::report(const StepFailures& failures) {

@@ -37,6 +37,17 @@ struct StepStats {
   /// whose residual tells how far the light is from converged.
   double light_ms = 0;
   render::LightUpdateReport light;
+  /// The other stages of total_ms: the store's record of the step, the fields gathered and
+  /// normalised, the views composited, the PNGs and data.csv written; other_ms is the rest.
+  double store_ms = 0, gather_ms = 0, composite_ms = 0, write_ms = 0, other_ms = 0;
+};
+
+/// What execute(time, cycle) would read, decided as execute() decides.
+struct StepNeeds {
+  bool renders = false;  ///< the trigger fires
+  bool stores = false;   ///< the store records the step
+  bool mesh = false;     ///< no mesh is prepared yet: execute() fails without one
+  std::vector<std::string> fields;  ///< names execute() reads (none when it neither renders nor stores)
 };
 
 /// One solver's in-situ pipeline: holds the prepared mesh, the fields published since the last
@@ -72,6 +83,10 @@ public:
   /// be rendered (e.g. not published) is skipped, the others are still written, and then an
   /// Error naming every failure is thrown.
   bool execute(double time, std::int64_t cycle);
+
+  /// What execute(time, cycle) would need, recording nothing: this rank's trigger and store
+  /// cadence (every rank that passes the same time and cycle gets the same answer).
+  StepNeeds step_needs(double time, std::int64_t cycle) const;
 
   /// Ends the run; later calls other than destruction throw Error(invalid_operation).
   void finalize();

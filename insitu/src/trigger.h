@@ -22,22 +22,26 @@ public:
 
   /// True when the step (time, cycle) renders; records it for the time rule.
   bool fires(double time, std::int64_t cycle) {
+    const bool fire = would_fire(time, cycle);
+    if (m_config.every_time > 0 && by_time(time)) m_last_interval = interval(time);
+    return fire;
+  }
+
+  /// What fires() would answer for the step, recording nothing (pnb_step_needs asks it before
+  /// the solver builds its arrays).
+  bool would_fire(double time, std::int64_t cycle) const {
     bool fire = false;
     if (m_config.every_cycles > 0) {
       const std::int64_t n = m_config.every_cycles;
       fire = ((cycle % n) + n) % n == 0;
     }
-    if (m_config.every_time > 0) {
-      const double k = std::floor(time / m_config.every_time + 1e-9);
-      if (!m_last_interval || k > *m_last_interval) {
-        m_last_interval = k;
-        fire = true;
-      }
-    }
-    return fire;
+    return fire || (m_config.every_time > 0 && by_time(time));
   }
 
 private:
+  double interval(double time) const { return std::floor(time / m_config.every_time + 1e-9); }
+  bool by_time(double time) const { return !m_last_interval || interval(time) > *m_last_interval; }
+
   TriggerConfig m_config;
   std::optional<double> m_last_interval;
 };

@@ -249,6 +249,60 @@ static void test_field_errors(pnb_context ctx) {
   expect(pnb_publish_field(ctx, &f, PNB_COPY), PNB_OK, ctx, NULL, "unconfigured field ignored");
 }
 
+/* pnb_step_needs: asked before every step of a run whose trigger has both rules and whose store
+ * keeps every other cycle, its answers are what pnb_execute then does, and asking changes nothing. */
+static void test_step_needs(const char* tmp) {
+  char config[1024];
+  pnb_context ctx = NULL;
+  pnb_mesh_desc mesh = good_mesh();
+  pnb_field_desc field = good_field("T");
+  pnb_needs needs = PNB_NEEDS_INIT;
+  pnb_step_stats stats = PNB_STEP_STATS_INIT;
+  int cycle, agreed = 1, rendered = 0, stored = 0;
+  snprintf(config, sizeof config,
+           "{\"output\": {\"directory\": \"%s/needs-db\"}, \"image\": {\"width\": 8, \"height\": 8},"
+           " \"cameras\": {\"phi\": [0], \"theta\": [30]}, \"fields\": [{\"name\": \"T\"},"
+           " {\"name\": \"T\", \"component\": 0}, {\"name\": \"P\"}],"
+           " \"trigger\": {\"every_cycles\": 4, \"every_time\": 0.25},"
+           " \"store\": {\"directory\": \"%s/needs-store\", \"every_cycles\": 2}}", tmp, tmp);
+  expect(pnb_create(config, &ctx), PNB_OK, NULL, NULL, "create for step needs");
+  if (!ctx) return;
+  expect(pnb_step_needs(ctx, 0.0, 0, &needs), PNB_OK, ctx, NULL, "step needs before the mesh");
+  check(needs.needs_mesh == 1 && needs.renders == 1 && needs.stores == 1, "before the mesh: the mesh, a render, a record", NULL);
+  check(needs.field_count == 2 && strcmp(pnb_needed_field(ctx, 0), "T") == 0 && strcmp(pnb_needed_field(ctx, 1), "P") == 0,
+        "the fields named once each, in the config's order", NULL);
+  check(pnb_needed_field(ctx, 2) == NULL && pnb_needed_field(ctx, -1) == NULL && pnb_needed_field(NULL, 0) == NULL,
+        "a needed field out of range is NULL", NULL);
+  expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish for step needs");
+  for (cycle = 0; cycle < 12; ++cycle) {
+    const double time = 0.1 * cycle;
+    pnb_needs again = PNB_NEEDS_INIT;
+    expect(pnb_step_needs(ctx, time, cycle, &needs), PNB_OK, ctx, NULL, "step needs");
+    expect(pnb_step_needs(ctx, time, cycle, &again), PNB_OK, ctx, NULL, "step needs asked again");
+    agreed &= memcmp(&needs, &again, sizeof needs) == 0 && needs.needs_mesh == 0;
+    agreed &= needs.field_count == ((needs.renders || needs.stores) ? 2 : 0);
+    pnb_publish_field(ctx, &field, PNB_BORROW);
+    field.name = "P";
+    pnb_publish_field(ctx, &field, PNB_BORROW);
+    field.name = "T";
+    stats.cycle = -1;
+    expect(pnb_execute(ctx, time, cycle), PNB_OK, ctx, NULL, "execute after step needs");
+    pnb_last_step(ctx, &stats);
+    agreed &= (stats.cycle == cycle) == (needs.renders == 1);
+    rendered += needs.renders;
+    stored += needs.stores;
+  }
+  check(agreed, "every answer is what pnb_execute then did, and asking twice changes nothing", NULL);
+  /* Renders: cycles 0, 4, 8 by cycle and 0, 3, 5, 8, 10 by time (0.25, 0.5, 0.75, 1.0 first reached). */
+  check(rendered == 6 && stored == 6, "six steps render and six are stored", NULL);
+  needs.struct_size = 0;
+  expect(pnb_step_needs(ctx, 1.2, 12, &needs), PNB_INVALID_ARGUMENT, ctx, "pnb_needs.struct_size is 0",
+         "step needs into an uninitialised struct");
+  expect(pnb_step_needs(ctx, 1.2, 12, NULL), PNB_INVALID_ARGUMENT, ctx, "out is NULL", "step needs into NULL");
+  expect(pnb_step_needs(NULL, 1.2, 12, &needs), PNB_INVALID_ARGUMENT, NULL, "pnb_step_needs", "step needs of a NULL ctx");
+  pnb_destroy(ctx);
+}
+
 int main(void) {
   char tmp[] = "/tmp/pnb-c-api-XXXXXX";
   char config[1024], csv[700];
@@ -262,6 +316,7 @@ int main(void) {
   check(pnb_last_error(NULL) != NULL, "pnb_last_error(NULL) is never NULL", NULL);
   test_create_errors(tmp);
   test_null_context();
+  test_step_needs(tmp);
 
   snprintf(config, sizeof config,
            "{\"output\": {\"directory\": \"%s/db\"}, \"image\": {\"width\": 16, \"height\": 16},"
@@ -338,6 +393,19 @@ int main(void) {
     check(stats.cycle == 2 && stats.images == 2, "last step: cycle 2, two cameras", NULL);
     check(stats.total_ms >= stats.render_ms && stats.render_ms > 0, "last step: times", NULL);
     check(stats.light_ms == 0 && stats.light_residual == 0, "last step: no light volume, no light figures", NULL);
+    {
+      const double stages = stats.store_ms + stats.gather_ms + stats.light_ms + stats.render_ms + stats.composite_ms +
+                            stats.write_ms + stats.other_ms;
+      check(stats.gather_ms >= 0 && stats.composite_ms > 0 && stats.write_ms > 0 && stats.other_ms >= 0,
+            "last step: every stage timed", NULL);
+      check(fabs(stages - stats.total_ms) <= 1e-6 * (1 + stats.total_ms), "last step: the stages add up to total_ms", NULL);
+    }
+    /* A caller built against ABI 4 passes the smaller struct: the stages are not written. */
+    memset(&stats, 0, sizeof stats);
+    stats.struct_size = (uint32_t)offsetof(pnb_step_stats, store_ms);
+    stats.write_ms = -1;
+    expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step into an ABI-4 sized struct");
+    check(stats.cycle == 2 && stats.write_ms == -1, "an ABI-4 struct gets what it holds and nothing beyond", NULL);
     expect(pnb_last_step(ctx, NULL), PNB_INVALID_ARGUMENT, ctx, "out is NULL", "last step into NULL");
     expect(pnb_last_step(NULL, &stats), PNB_INVALID_ARGUMENT, NULL, "pnb_last_step", "last step of a NULL ctx");
   }

@@ -32,7 +32,7 @@ extern "C" {
 #endif
 
 /* The C ABI's version: bumped when a struct grows or a call is added. */
-#define PNB_ABI_VERSION 4
+#define PNB_ABI_VERSION 5
 
 typedef struct pnb_context_s* pnb_context;
 
@@ -158,11 +158,40 @@ typedef struct {
   double light_ms;
   double light_residual;
   int light_converged;
+  /* ABI 5: the other stages, so that store + gather + light + render + composite + write + other
+   * = total_ms: the step's fields recorded in the store (on a step that stores), the fields
+   * gathered, converted and normalised, the views composited (over ranks: their runs exchanged
+   * and merged), the PNGs encoded and written and data.csv committed, and what is left. */
+  double store_ms;
+  double gather_ms;
+  double composite_ms;
+  double write_ms;
+  double other_ms;
 } pnb_step_stats;
-#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0}
+#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 /* Fills the members of *out that its struct_size holds; PNB_INVALID_ARGUMENT for a NULL out or
  * a struct_size that is not of any version's struct. */
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);
+/* What pnb_execute(ctx, time, cycle) will need, asked before the solver builds anything (ABI 5):
+ * renders (the trigger fires), stores (the store records this cycle), needs_mesh (no mesh is
+ * published yet: pnb_execute fails without one; a mesh whose points moved must be republished
+ * whatever this says) and field_count, the fields pnb_execute will read (0 when the step neither
+ * renders nor stores), named by pnb_needed_field. Decided exactly as pnb_execute decides, and
+ * records nothing: asking twice, or not at all, changes no later step. Over MPI ranks it asks
+ * this rank alone (no communication); ranks that pass the same time and cycle, as pnb_execute
+ * requires, get the same answer. */
+typedef struct {
+  uint32_t struct_size; /* sizeof(pnb_needs) as the caller was compiled (PNB_NEEDS_INIT) */
+  int renders;
+  int stores;
+  int needs_mesh;
+  int field_count;
+} pnb_needs;
+#define PNB_NEEDS_INIT {sizeof(pnb_needs), 0, 0, 0, 0}
+pnb_status pnb_step_needs(pnb_context ctx, double time, int64_t cycle, pnb_needs* out);
+/* Name of needed field `index` (0 .. field_count - 1) of the last pnb_step_needs on ctx; NULL for
+ * an index out of range. Valid until the next pnb_step_needs on ctx. */
+const char* pnb_needed_field(pnb_context ctx, int index);
 /* Finalizes: flushes pending work; the context stays valid only for pnb_destroy. */
 pnb_status pnb_finalize(pnb_context ctx);
 /* Message of the last failed call on ctx (or of the last failed pnb_create when ctx is NULL);
