@@ -445,8 +445,19 @@ void parse_compositing(const json& j, const std::string& path, Config& c) {
   }
 }
 
+void parse_progress(const json& j, const std::string& path, Config& c) {
+  only_keys(j, path, {"log", "stderr_every"});
+  if (const json* l = find(j, "log")) {
+    c.progress.log = string(*l, child(path, "log"));
+    if (c.progress.log.empty()) fail(child(path, "log"), "must not be empty (leave the key out for no log)");
+  }
+  if (const json* e = find(j, "stderr_every"))
+    c.progress.stderr_every = static_cast<int>(integer(*e, child(path, "stderr_every"), 0, 1 << 30));
+}
+
 Config parse_document(const json& j) {
-  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store", "compositing"});
+  only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store", "compositing",
+                    "progress"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -474,6 +485,7 @@ Config parse_document(const json& j) {
   if (const json* l = find(j, "lighting")) c.lighting = parse_lighting(*l, "lighting");
   if (const json* st = find(j, "store")) c.store = parse_store(*st, "store");
   if (const json* cm = find(j, "compositing")) parse_compositing(*cm, "compositing", c);
+  if (const json* pr = find(j, "progress")) parse_progress(*pr, "progress", c);
   return c;
 }
 

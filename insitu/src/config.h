@@ -99,6 +99,12 @@ struct StoreConfig {
   std::uint64_t memory_budget_bytes = 0;  ///< 0: what two windows of every field need
 };
 
+/// What a run reports of its rendered steps (insitu/README.md, "progress").
+struct ProgressConfig {
+  std::string log;       ///< one JSON line per rendered step appended to this file; empty: none
+  int stderr_every = 0;  ///< a short line on stderr every Nth rendered step; 0: never
+};
+
 /// The whole configuration. See insitu/README.md for the JSON schema.
 struct Config {
   std::string output_directory;
@@ -118,6 +124,7 @@ struct Config {
   /// view may take (RenderOptions::ray_runs_memory_bytes); a view that needs more fails on every
   /// rank, naming the rank.
   std::size_t runs_memory_bytes = std::size_t{2} << 30;
+  ProgressConfig progress;
   /// The JSON text parse_config read: a store keeps it as config.json, so that views of the run
   /// can be rendered again later with the same fields, transfer functions and lighting.
   std::string text;

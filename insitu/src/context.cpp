@@ -18,6 +18,7 @@
 #include "atomic_file.h"
 #include "field_stages.h"
 #include "field_store.h"
+#include "progress_log.h"
 #include "ghost_cells.h"
 #include "penumbra/core/mesh_validation.h"
 #include "view_cameras.h"
@@ -162,6 +163,9 @@ Context::Context(Config config, std::shared_ptr<RankGroup> group)
       m_config.lighting->occlusion.space == OcclusionSpace::image)
     m_config.backend = Backend::cpu;
   m_config.backend = resolve_backend(m_config.backend);
+  // The log first: a log that cannot be opened leaves no database behind to refuse a retry.
+  if (m_group->rank() == 0 && (!m_config.progress.log.empty() || m_config.progress.stderr_every > 0))
+    m_progress = std::make_unique<ProgressLog>(m_config.progress);
   if (m_group->rank() == 0) m_writer = std::make_unique<ImageWriter>(m_config);
   if (m_config.store) {
     m_store = std::make_unique<FieldStore>(*m_config.store, m_group->rank(), m_group->size());
@@ -651,6 +655,7 @@ bool Context::execute(double time, std::int64_t cycle) {
 
   std::vector<CinemaDatabase::Row> rows;
   double render_ms = 0;
+  const std::uint64_t bytes_before = m_writer ? m_writer->bytes_written() : 0;
   m_last_step = {};
   m_last_step.store_ms = store_ms;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
@@ -677,8 +682,24 @@ bool Context::execute(double time, std::int64_t cycle) {
   s.render_ms = render_ms;
   s.total_ms = ms_since(t0);
   s.other_ms = std::max(0.0, s.total_ms - (s.store_ms + s.gather_ms + s.light_ms + s.render_ms + s.composite_ms + s.write_ms));
+  log_progress(time, bytes_before, failures);
   report(failures);
   return true;
+}
+
+void Context::log_progress(double time, std::uint64_t bytes_before, StepFailures& failures) {
+  if (!m_progress) return;
+  StepReport r;
+  r.time = time;
+  r.stats = &m_last_step;
+  r.fields = m_field_labels;
+  r.bytes_written = m_writer ? m_writer->bytes_written() - bytes_before : 0;
+  r.failure = failures.text;
+  try {
+    m_progress->step(r);
+  } catch (const Error& e) {
+    failures.add(e);
+  }
 }
 
 StepNeeds Context::step_needs(double time, std::int64_t cycle) const {

@@ -26,6 +26,7 @@
 namespace penumbra::insitu {
 
 class FieldStore;
+class ProgressLog;
 
 /// What the last rendering step did, for diagnostics and examples.
 struct StepStats {
@@ -157,6 +158,9 @@ private:
   void log_if_tangled(const render::TetMesh& tets) const;
   /// Whether the step renders, the same on every rank (Error when the ranks disagree).
   bool trigger_fires(double time, std::int64_t cycle);
+  /// The rendered step in the progress log (rank 0): a log that cannot be written is one of the
+  /// step's failures.
+  void log_progress(double time, std::uint64_t bytes_before, StepFailures& failures);
   /// The step's failures: thrown, on every rank when any rank had one.
   void report(const StepFailures& failures);
   /// The composite stage: a view's image over the background; with several ranks their runs
@@ -206,6 +210,7 @@ private:
   Trigger m_trigger;
   std::unique_ptr<ImageWriter> m_writer;  ///< the write stage; opened with the context, on rank 0 only
   std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
+  std::unique_ptr<ProgressLog> m_progress;  ///< "progress", on rank 0; null without one
   bool m_cpu_fallback = false;           ///< "auto": a mesh the GPU cannot hold renders on the CPU
   std::unique_ptr<PreparedMesh> m_mesh;
   std::map<std::string, HeldField> m_fields;

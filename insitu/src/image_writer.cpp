@@ -2,6 +2,7 @@
 // insitu/src/image_writer.cpp -- PNGs and database rows
 #include "image_writer.h"
 
+#include <filesystem>
 #include <utility>
 
 #include "penumbra/render/image.h"
@@ -26,7 +27,11 @@ ImageWriter::ImageWriter(const Config& config)
 
 CinemaDatabase::Row ImageWriter::write(const ComposedImage& image, const ImageLabels& labels) {
   const std::string rel = m_database->new_image_path(labels.field, labels.stem);
-  render::write_png(m_database->path_of(rel), image.rgb, image.width, image.height);
+  const std::string path = m_database->path_of(rel);
+  render::write_png(path, image.rgb, image.width, image.height);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) m_bytes += size;
   CinemaDatabase::Row row;
   row.values = {labels.time, labels.phi, labels.theta};
   if (m_camera_column) row.values.push_back(labels.camera);

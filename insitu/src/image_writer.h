@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/image_writer.h -- the last stage of a step: images into the Cinema database
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,9 +32,12 @@ public:
   CinemaDatabase::Row write(const ComposedImage& image, const ImageLabels& labels);
   /// Lists the rows of written images in data.csv (atomically).
   void commit(const std::vector<CinemaDatabase::Row>& rows);
+  /// Bytes of the PNG files written since the writer opened.
+  std::uint64_t bytes_written() const { return m_bytes; }
 
 private:
   bool m_camera_column, m_lighting_column;
+  std::uint64_t m_bytes = 0;
   std::unique_ptr<CinemaDatabase> m_database;
 };
 
