@@ -248,7 +248,7 @@ FieldConfig parse_field(const json& j, const std::string& path) {
 }
 
 void parse_trigger(const json& j, const std::string& path, Config& c) {
-  only_keys(j, path, {"every_cycles", "every_time"});
+  only_keys(j, path, {"every_cycles", "every_time", "when"});
   c.trigger = {};
   if (const json* n = find(j, "every_cycles"))
     c.trigger.every_cycles = integer(*n, child(path, "every_cycles"), 1, std::numeric_limits<std::int64_t>::max());
@@ -256,7 +256,9 @@ void parse_trigger(const json& j, const std::string& path, Config& c) {
     c.trigger.every_time = number(*t, child(path, "every_time"));
     if (c.trigger.every_time <= 0) fail(child(path, "every_time"), "must be > 0");
   }
-  if (c.trigger.every_cycles == 0 && c.trigger.every_time == 0) fail(path, "needs every_cycles and/or every_time");
+  if (const json* w = find(j, "when")) c.trigger.when = TriggerExpression(string(*w, child(path, "when")), child(path, "when"));
+  if (c.trigger.every_cycles == 0 && c.trigger.every_time == 0 && !c.trigger.when)
+    fail(path, "needs every_cycles, every_time and/or when");
 }
 
 render::Light parse_light(const json& j, const std::string& path) {
@@ -494,6 +496,9 @@ Config parse_document(const json& j) {
 bool Config::uses_field(const std::string& name) const {
   for (const auto& f : fields)
     if (f.name == name) return true;
+  if (trigger.when)
+    for (const auto& f : trigger.when->fields())
+      if (f == name) return true;
   return false;
 }
 

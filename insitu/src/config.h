@@ -14,6 +14,7 @@
 #include "penumbra/render/occlusion.h"
 #include "penumbra/render/shading.h"
 #include "penumbra/render/transfer_function.h"
+#include "trigger_expression.h"
 
 namespace penumbra::insitu {
 
@@ -56,10 +57,12 @@ struct FieldConfig {
   render::TransferFunction transfer_function;  ///< x in x_units, opacity in opacity_unit
 };
 
-/// When a step renders: every `every_cycles` cycles and/or every `every_time` of simulation time.
+/// When a step renders: every `every_cycles` cycles, every `every_time` of simulation time, and/or
+/// when the fields' statistics satisfy `when` (trigger_expression.h).
 struct TriggerConfig {
   std::int64_t every_cycles = 0;  ///< 0 = not used
   double every_time = 0.0;        ///< 0 = not used
+  std::optional<TriggerExpression> when;
 };
 
 /// Cone-traced directional occlusion and shadows (insitu/README.md, "lighting.occlusion").
@@ -129,7 +132,7 @@ struct Config {
   /// can be rendered again later with the same fields, transfer functions and lighting.
   std::string text;
 
-  /// True when `name` is rendered by at least one field entry.
+  /// True when `name` is rendered by at least one field entry or read by the trigger.
   bool uses_field(const std::string& name) const;
 };
 

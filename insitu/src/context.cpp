@@ -648,7 +648,9 @@ bool Context::execute(double time, std::int64_t cycle) {
   // The history is kept on its own cadence, whether or not this step renders.
   if (m_store && m_store->records(cycle)) store_fields(time, cycle, values, failures);
   const double store_ms = ms_since(t0);
-  if (!trigger_fires(time, cycle)) {
+  const bool fires = trigger_fires(time, cycle);
+  observe_trigger_statistics(cycle, failures);
+  if (!fires) {
     report(failures);
     return false;
   }
@@ -702,15 +704,61 @@ void Context::log_progress(double time, std::uint64_t bytes_before, StepFailures
   }
 }
 
+void Context::observe_trigger_statistics(std::int64_t cycle, StepFailures& failures) {
+  const std::vector<std::string> names = m_trigger.watched_fields();
+  if (names.empty()) return;
+  // Per field: min, -max (both reduced by minimum), then the finite values' sum and count.
+  std::vector<double> extremes, sums;
+  bool published = true;
+  try {
+    for (const std::string& name : names) {
+      const auto it = m_fields.find(name);
+      if (it == m_fields.end())
+        throw Error(ErrorCode::invalid_operation, "pnb_execute: trigger.when reads field '" + name +
+                                                      "', which was not published for cycle " + std::to_string(cycle) +
+                                                      " (pnb_step_needs lists it at every step)");
+      const std::vector<double> v = point_values(m_mesh->view, it->second.view, ComponentMode::magnitude, 0);
+      const ValueRange r = finite_range(v);
+      double sum = 0;
+      for (double x : v)
+        if (std::isfinite(x)) sum += x;
+      extremes.insert(extremes.end(), {r.finite_count ? r.lo : HUGE_VAL, r.finite_count ? -r.hi : HUGE_VAL});
+      sums.insert(sums.end(), {sum, static_cast<double>(r.finite_count)});
+    }
+  } catch (const Error& e) {
+    failures.add(e);
+    published = false;
+  }
+  // Every rank takes part in the reductions; a rank that lacks a field makes every rank skip
+  // this step's statistics, so that all keep the same ones.
+  double ok = published ? 1 : 0;
+  m_group->minimum(&ok, 1);
+  if (ok == 0) return;
+  m_group->minimum(extremes.data(), static_cast<int>(extremes.size()));
+  const std::vector<double> all = m_group->all_gather(sums);
+  StatsByField stats;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    double sum = 0, count = 0;
+    for (std::size_t at = 2 * i; at < all.size(); at += sums.size()) sum += all[at], count += all[at + 1];
+    if (count == 0) continue;  // no finite value anywhere: its comparisons are false
+    stats[names[i]] = {extremes[2 * i], -extremes[2 * i + 1], sum / count};
+  }
+  m_trigger.observe(std::move(stats));
+}
+
 StepNeeds Context::step_needs(double time, std::int64_t cycle) const {
   require_open("pnb_step_needs");
   StepNeeds needs;
   needs.renders = m_trigger.would_fire(time, cycle);
   needs.stores = m_store && m_store->records(cycle);
   needs.mesh = !m_mesh;
+  auto need = [&needs](const std::string& name) {
+    if (std::find(needs.fields.begin(), needs.fields.end(), name) == needs.fields.end()) needs.fields.push_back(name);
+  };
   if (needs.renders || needs.stores)
-    for (const FieldConfig& f : m_config.fields)
-      if (std::find(needs.fields.begin(), needs.fields.end(), f.name) == needs.fields.end()) needs.fields.push_back(f.name);
+    for (const FieldConfig& f : m_config.fields) need(f.name);
+  // The trigger's statistics are taken at every step.
+  for (const std::string& name : m_trigger.watched_fields()) need(name);
   return needs;
 }
 

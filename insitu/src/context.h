@@ -48,7 +48,8 @@ struct StepNeeds {
   bool renders = false;  ///< the trigger fires
   bool stores = false;   ///< the store records the step
   bool mesh = false;     ///< no mesh is prepared yet: execute() fails without one
-  std::vector<std::string> fields;  ///< names execute() reads (none when it neither renders nor stores)
+  /// Names execute() reads: the rendered ones when it renders or stores, the trigger's always.
+  std::vector<std::string> fields;
 };
 
 /// One solver's in-situ pipeline: holds the prepared mesh, the fields published since the last
@@ -161,6 +162,9 @@ private:
   /// The rendered step in the progress log (rank 0): a log that cannot be written is one of the
   /// step's failures.
   void log_progress(double time, std::uint64_t bytes_before, StepFailures& failures);
+  /// The statistics of the fields the trigger's `when` reads, taken at every step for the next
+  /// steps' decisions (collective: reduced over the ranks). A field not published is a failure.
+  void observe_trigger_statistics(std::int64_t cycle, StepFailures& failures);
   /// The step's failures: thrown, on every rank when any rank had one.
   void report(const StepFailures& failures);
   /// The composite stage: a view's image over the background; with several ranks their runs

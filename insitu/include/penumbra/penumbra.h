@@ -175,8 +175,9 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);
 /* What pnb_execute(ctx, time, cycle) will need, asked before the solver builds anything (ABI 5):
  * renders (the trigger fires), stores (the store records this cycle), needs_mesh (no mesh is
  * published yet: pnb_execute fails without one; a mesh whose points moved must be republished
- * whatever this says) and field_count, the fields pnb_execute will read (0 when the step neither
- * renders nor stores), named by pnb_needed_field. Decided exactly as pnb_execute decides, and
+ * whatever this says) and field_count, the fields pnb_execute will read (the rendered ones when
+ * the step renders or stores, and at every step those a trigger "when" watches), named by
+ * pnb_needed_field. Decided exactly as pnb_execute decides, and
  * records nothing: asking twice, or not at all, changes no later step. Over MPI ranks it asks
  * this rank alone (no communication); ranks that pass the same time and cycle, as pnb_execute
  * requires, get the same answer. */

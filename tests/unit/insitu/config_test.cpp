@@ -195,7 +195,7 @@ TEST(Config, EveryErrorNamesItsKeyPath) {
   expect_error(with_tf(R"({"opacity_unit": "cm"})"), inv, "config: fields[0].transfer_function.opacity_unit must be one of");
   expect_error(with_tf(R"({"colormap": "viridis"})"), inv, "config: fields[0].transfer_function.colormap is not a known key");
   expect_error(with_tf("[]"), inv, "config: fields[0].transfer_function must be an object");
-  expect_error(doc(kOut, kCams, kFields, R"(, "trigger": {})"), inv, "config: trigger needs every_cycles and/or every_time");
+  expect_error(doc(kOut, kCams, kFields, R"(, "trigger": {})"), inv, "config: trigger needs every_cycles, every_time and/or when");
   expect_error(doc(kOut, kCams, kFields, R"(, "trigger": {"every_cycles": 0})"), inv, "config: trigger.every_cycles must be in [1,");
   expect_error(doc(kOut, kCams, kFields, R"(, "trigger": {"every_time": -1})"), inv, "config: trigger.every_time must be > 0");
   expect_error(doc(kOut, kCams, kFields, R"(, "trigger": {"every_step": 1})"), inv, "config: trigger.every_step is not a known key");

@@ -420,3 +420,51 @@ TEST(Context, CellFieldsAndVectorComponentsAreRendered) {
 
 }  // namespace
 }  // namespace penumbra::insitu
+
+namespace penumbra::insitu {
+namespace {
+
+// "trigger": {"when": ...}: a step renders when the statistics of the step before satisfy it;
+// pnb_step_needs knows so before the step's arrays exist, and lists the watched field every step.
+TEST(Context, TriggerWhenRendersOnTheFieldsStatistics) {
+  TempDir tmp;
+  const auto mesh = fixtures::block(BlockCells::tets, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
+  Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])",
+                                                 R"(, "trigger": {"when": "max(P) > 2.5"})")));
+  ctx.publish_mesh(mesh.view());
+  std::vector<std::int64_t> rendered;
+  for (int k = 0; k < 6; ++k) {
+    const StepNeeds needs = ctx.step_needs(k, k);
+    EXPECT_EQ(needs.fields, needs.renders ? (std::vector<std::string>{"T", "P"}) : (std::vector<std::string>{"P"}));
+    // P's maximum is k: the step after the first above 2.5 (k = 3) renders, and every one after.
+    const auto p = fixtures::sample(mesh, [k](double x, double, double) { return k * x; });
+    const auto t = fixtures::sample(mesh, [](double x, double y, double) { return x + y; });
+    ctx.publish_field(fixtures::point_field("P", p), false);
+    ctx.publish_field(fixtures::point_field("T", t), false);
+    if (ctx.execute(k, k)) rendered.push_back(k);
+    EXPECT_EQ(needs.renders, !rendered.empty() && rendered.back() == k) << k;
+  }
+  EXPECT_EQ(rendered, (std::vector<std::int64_t>{4, 5}));
+  // The watched field missing from a step: a clear failure naming it.
+  const auto t = fixtures::sample(mesh, [](double x, double, double) { return x; });
+  ctx.publish_field(fixtures::point_field("T", t), false);
+  try {
+    ctx.execute(6, 6);
+    ADD_FAILURE() << "a step without the trigger's field passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("trigger.when reads field 'P'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Context, TriggerWhenIsCheckedWhenTheConfigIsRead) {
+  try {
+    parse_config(testing::small_config("/tmp/x", R"([{"name": "T"}])", R"(, "trigger": {"when": "max(T) >> 2"})"));
+    ADD_FAILURE() << "a malformed expression was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("config: trigger.when: "), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_config(testing::small_config("/tmp/x", R"([{"name": "T"}])", R"(, "trigger": {"when": 3})")), Error);
+}
+
+}  // namespace
+}  // namespace penumbra::insitu
