@@ -191,6 +191,52 @@ int runs_over_budget(const std::string& dir, const std::string& backend, const P
   return all ? 0 : 1;
 }
 
+// "trigger": {"when": "max(S) > 2.5"} on slabs along x with S = k x at step k: each rank's own
+// maximum crosses 2.5 at another step, the reduced one at k = 3, so every rank renders steps 4
+// and 5 (the decision reads the step before), pnb_step_needs says so on every rank, and no rank
+// is told the others disagree.
+int when_trigger(const std::string& dir, const Part& part, int rank) {
+  std::string c = config(dir, "none", "cpu", false);
+  c.insert(c.rfind('}'), R"(, "trigger": {"when": "max(S) > 2.5"})");
+  pnb_context ctx = nullptr;
+  int good = ok(nullptr, pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank) ? 1 : 0;
+  if (ctx) {
+    const OwnedMesh& mesh = part.mesh;
+    const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
+    good = ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank) ? good : 0;
+    double lo = 1e300, hi = -1e300;
+    for (std::size_t i = 0; i < mesh.point_count(); ++i) lo = std::min(lo, mesh.xyz[3 * i]), hi = std::max(hi, mesh.xyz[3 * i]);
+    std::string rendered;
+    for (int k = 0; k < 6; ++k) {
+      pnb_needs needs = PNB_NEEDS_INIT;
+      good = ok(ctx, pnb_step_needs(ctx, k, k, &needs), "pnb_step_needs", rank) ? good : 0;
+      // x spans the whole block's [lo, hi] over the ranks; S = k (x - lo) / (hi - lo) there.
+      const auto t = penumbra::fixtures::sample(mesh, [](double x, double y, double z) { return field_at(x, y, z, 0); });
+      const auto s = penumbra::fixtures::sample(mesh, [k](double x, double, double) { return k * x; });
+      pnb_field_desc f = PNB_FIELD_DESC_INIT, g = PNB_FIELD_DESC_INIT;
+      f.name = "T", f.values = t.data(), f.count = static_cast<int64_t>(t.size());
+      g.name = "S", g.values = s.data(), g.count = static_cast<int64_t>(s.size());
+      pnb_publish_field(ctx, &f, PNB_BORROW);
+      pnb_publish_field(ctx, &g, PNB_BORROW);
+      good = ok(ctx, pnb_execute(ctx, k, k), "pnb_execute", rank) ? good : 0;
+      pnb_step_stats stats = PNB_STEP_STATS_INIT;
+      pnb_last_step(ctx, &stats);
+      const bool did = stats.cycle == k && stats.total_ms > 0;  // images: rank 0 writes them
+      if (did != (needs.renders == 1)) good = 0;
+      if (did) rendered += std::to_string(k);
+    }
+    if (rendered != "45") {
+      std::fprintf(stderr, "rank %d (x in [%g, %g]): rendered steps '%s', expected '45'\n", rank, lo, hi, rendered.c_str());
+      good = 0;
+    }
+    pnb_destroy(ctx);
+  }
+  int all = 0;
+  MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return all ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -216,6 +262,7 @@ int main(int argc, char** argv) {
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
   if (lighting == "occlusion-image-refused") return refused(dir, backend, rank);
+  if (lighting == "when-trigger") return when_trigger(dir, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
 
   const OwnedMesh whole = penumbra::fixtures::tet_block_with_hole(8);
