@@ -334,8 +334,21 @@ bool Context::points_moved(const MeshView& mesh) const {
 }
 
 void Context::publish_field(const FieldView& field, bool copy) {
+  if (!check_field(field)) return;
+  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
+  HeldField held;
+  held.view = field;
+  if (copy) {
+    held.owned.resize(item * field.values.count);
+    for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&held.owned[i * item], field.values.at(i), item);
+    held.view.values = {held.owned.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
+  }
+  m_fields[field.name] = std::move(held);
+}
+
+bool Context::check_field(const FieldView& field) const {
   require_open("pnb_publish_field");
-  if (!m_config.uses_field(field.name)) return;
+  if (!m_config.uses_field(field.name)) return false;
   const std::string who = "pnb_publish_field: field '" + field.name + "'";
   if (!m_mesh)
     throw Error(ErrorCode::invalid_operation, who + ": no mesh published yet; call pnb_publish_mesh first");
@@ -355,14 +368,7 @@ void Context::publish_field(const FieldView& field, bool copy) {
     require(f.name != field.name || f.mode == ComponentMode::magnitude || f.component < field.components,
             who + " has " + std::to_string(field.components) + " components but the config renders component " +
                 std::to_string(f.component));
-  HeldField held;
-  held.view = field;
-  if (copy) {
-    held.owned.resize(item * field.values.count);
-    for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&held.owned[i * item], field.values.at(i), item);
-    held.view.values = {held.owned.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
-  }
-  m_fields[field.name] = std::move(held);
+  return true;
 }
 
 void Context::drop_borrowed_fields() {
@@ -633,24 +639,41 @@ bool Context::trigger_fires(double time, std::int64_t cycle) {
 }
 
 bool Context::execute(double time, std::int64_t cycle) {
+  struct DropBorrowed {
+    Context* c;
+    ~DropBorrowed() { c->drop_borrowed_fields(); }
+  } drop{this};
+  std::map<std::string, FieldView> published;
+  for (const auto& [name, held] : m_fields) published.emplace(name, held.view);
+  return run_step(time, cycle, decide_step(time, cycle, published));
+}
+
+StepDecision Context::decide_step(double time, std::int64_t cycle, const std::map<std::string, FieldView>& fields) {
   require_open("pnb_execute");
   agreed("pnb_execute", [&] {
     if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
     require(std::isfinite(time), "pnb_execute: time must be finite");
   });
-  struct DropBorrowed {
-    Context* c;
-    ~DropBorrowed() { c->drop_borrowed_fields(); }
-  } drop{this};
+  StepDecision d;
+  d.renders = trigger_fires(time, cycle);
   StepFailures failures;
+  observe_trigger_statistics(cycle, fields, failures);
+  d.failure = failures.text;
+  d.code = failures.code;
+  return d;
+}
+
+bool Context::run_step(double time, std::int64_t cycle, const StepDecision& decision) {
+  require_open("pnb_execute");
+  StepFailures failures;
+  failures.text = decision.failure;
+  failures.code = decision.code;
   StepValues values(m_config.fields.size());
   const auto t0 = Clock::now();
   // The history is kept on its own cadence, whether or not this step renders.
   if (m_store && m_store->records(cycle)) store_fields(time, cycle, values, failures);
   const double store_ms = ms_since(t0);
-  const bool fires = trigger_fires(time, cycle);
-  observe_trigger_statistics(cycle, failures);
-  if (!fires) {
+  if (!decision.renders) {
     report(failures);
     return false;
   }
@@ -704,7 +727,8 @@ void Context::log_progress(double time, std::uint64_t bytes_before, StepFailures
   }
 }
 
-void Context::observe_trigger_statistics(std::int64_t cycle, StepFailures& failures) {
+void Context::observe_trigger_statistics(std::int64_t cycle, const std::map<std::string, FieldView>& fields,
+                                         StepFailures& failures) {
   const std::vector<std::string> names = m_trigger.watched_fields();
   if (names.empty()) return;
   // Per field: min, -max (both reduced by minimum), then the finite values' sum and count.
@@ -712,12 +736,12 @@ void Context::observe_trigger_statistics(std::int64_t cycle, StepFailures& failu
   bool published = true;
   try {
     for (const std::string& name : names) {
-      const auto it = m_fields.find(name);
-      if (it == m_fields.end())
+      const auto it = fields.find(name);
+      if (it == fields.end())
         throw Error(ErrorCode::invalid_operation, "pnb_execute: trigger.when reads field '" + name +
                                                       "', which was not published for cycle " + std::to_string(cycle) +
                                                       " (pnb_step_needs lists it at every step)");
-      const std::vector<double> v = point_values(m_mesh->view, it->second.view, ComponentMode::magnitude, 0);
+      const std::vector<double> v = point_values(m_mesh->view, it->second, ComponentMode::magnitude, 0);
       const ValueRange r = finite_range(v);
       double sum = 0;
       for (double x : v)

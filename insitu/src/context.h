@@ -43,6 +43,14 @@ struct StepStats {
   double store_ms = 0, gather_ms = 0, composite_ms = 0, write_ms = 0, other_ms = 0;
 };
 
+/// The first half of a step, decided where the solver calls (Context::decide_step): whether it
+/// renders, and the failure of taking the trigger's statistics (reported with the step).
+struct StepDecision {
+  bool renders = false;
+  std::string failure;
+  ErrorCode code = ErrorCode::ok;
+};
+
 /// What execute(time, cycle) would read, decided as execute() decides.
 struct StepNeeds {
   bool renders = false;  ///< the trigger fires
@@ -85,6 +93,18 @@ public:
   /// be rendered (e.g. not published) is skipped, the others are still written, and then an
   /// Error naming every failure is thrown.
   bool execute(double time, std::int64_t cycle);
+
+  /// execute() in two halves, for a runner that takes the second to another thread
+  /// (AsyncRunner): decide_step records the trigger's decision and takes its statistics from
+  /// `fields` (the step's published fields by name), touching nothing that run_step touches
+  /// besides reading the prepared mesh; run_step records the step in the store and, when the
+  /// decision renders, renders, writes and commits it from the fields published to this context.
+  StepDecision decide_step(double time, std::int64_t cycle, const std::map<std::string, FieldView>& fields);
+  bool run_step(double time, std::int64_t cycle, const StepDecision& decision);
+
+  /// publish_field's checks alone, storing nothing: false for a field the config does not use,
+  /// Error for one it refuses.
+  bool check_field(const FieldView& field) const;
 
   /// What execute(time, cycle) would need, recording nothing: this rank's trigger and store
   /// cadence (every rank that passes the same time and cycle gets the same answer).
@@ -164,7 +184,8 @@ private:
   void log_progress(double time, std::uint64_t bytes_before, StepFailures& failures);
   /// The statistics of the fields the trigger's `when` reads, taken at every step for the next
   /// steps' decisions (collective: reduced over the ranks). A field not published is a failure.
-  void observe_trigger_statistics(std::int64_t cycle, StepFailures& failures);
+  void observe_trigger_statistics(std::int64_t cycle, const std::map<std::string, FieldView>& fields,
+                                  StepFailures& failures);
   /// The step's failures: thrown, on every rank when any rank had one.
   void report(const StepFailures& failures);
   /// The composite stage: a view's image over the background; with several ranks their runs
