@@ -9,13 +9,15 @@
 
 #include "config.h"
 #include "c_api_internal.h"
+#include "async_runner.h"
 #include "context.h"
 #include "penumbra/core/error.h"
 #include "penumbra/penumbra.h"
 #include "sized_structs.h"
 
 struct pnb_context_s {
-  std::unique_ptr<penumbra::insitu::Context> context;
+  std::unique_ptr<penumbra::insitu::Context> context;    ///< null when `async` holds it
+  std::unique_ptr<penumbra::insitu::AsyncRunner> async;  ///< "async": the steps on a worker thread
   std::string last_error;
   std::vector<std::string> needed_fields;  ///< of the last pnb_step_needs
 };
@@ -184,6 +186,10 @@ pnb_status create_context(const char* call, const char* config, std::shared_ptr<
     require(config != nullptr, std::string(call) + ": config is NULL (expected a file path or JSON text)");
     ctx = std::make_unique<pnb_context_s>();
     ctx->context = std::make_unique<Context>(parse_config(config), group);
+    if (ctx->context->config().async.enabled) {
+      const bool skip = ctx->context->config().async.skip_when_busy;
+      ctx->async = std::make_unique<AsyncRunner>(std::move(ctx->context), skip);
+    }
   });
   if (group->size() > 1) {
     const auto failed = group->failures(status == PNB_OK ? 0 : static_cast<int>(status), t_last_error);
@@ -218,7 +224,8 @@ pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_owne
     const pnb_mesh_desc d = penumbra::insitu::read_sized(*mesh, pnb_mesh_desc PNB_MESH_DESC_INIT, kFirstMeshDescBytes,
                                                          "pnb_publish_mesh", "pnb_mesh_desc", "PNB_MESH_DESC_INIT");
     // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
-    ctx->context->publish_mesh(mesh_view(d));
+    if (ctx->async) ctx->async->publish_mesh(mesh_view(d));
+    else ctx->context->publish_mesh(mesh_view(d));
   });
 }
 
@@ -229,20 +236,24 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
     penumbra::require(valid_ownership(own), "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
     const pnb_field_desc d = penumbra::insitu::read_sized(*field, pnb_field_desc PNB_FIELD_DESC_INIT, kFirstFieldDescBytes,
                                                           "pnb_publish_field", "pnb_field_desc", "PNB_FIELD_DESC_INIT");
-    ctx->context->publish_field(field_view(d), raw(own) == PNB_COPY);
+    if (ctx->async) ctx->async->publish_field(field_view(d), raw(own) == PNB_COPY);
+    else ctx->context->publish_field(field_view(d), raw(own) == PNB_COPY);
   });
 }
 
 pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle) {
   if (!ctx) return null_context("pnb_execute");
-  return guarded(ctx, [&] { ctx->context->execute(time, cycle); });
+  return guarded(ctx, [&] {
+    if (ctx->async) ctx->async->execute(time, cycle);
+    else ctx->context->execute(time, cycle);
+  });
 }
 
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
   if (!ctx) return null_context("pnb_last_step");
   return guarded(ctx, [&] {
     penumbra::require(out != nullptr, "pnb_last_step: out is NULL");
-    const penumbra::insitu::StepStats& s = ctx->context->last_step();
+    const penumbra::insitu::StepStats s = ctx->async ? ctx->async->last_step() : ctx->context->last_step();
     pnb_step_stats stats PNB_STEP_STATS_INIT;
     stats.cycle = s.cycle;
     stats.images = s.images;
@@ -256,6 +267,7 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
     stats.composite_ms = s.composite_ms;
     stats.write_ms = s.write_ms;
     stats.other_ms = s.other_ms;
+    stats.skipped_steps = ctx->async ? ctx->async->skipped_steps() : 0;
     penumbra::insitu::write_sized(stats, out, kFirstStepStatsBytes, "pnb_last_step", "pnb_step_stats", "PNB_STEP_STATS_INIT");
   });
 }
@@ -264,7 +276,8 @@ pnb_status pnb_step_needs(pnb_context ctx, double time, int64_t cycle, pnb_needs
   if (!ctx) return null_context("pnb_step_needs");
   return guarded(ctx, [&] {
     penumbra::require(out != nullptr, "pnb_step_needs: out is NULL");
-    const penumbra::insitu::StepNeeds needs = ctx->context->step_needs(time, cycle);
+    const penumbra::insitu::StepNeeds needs =
+        ctx->async ? ctx->async->step_needs(time, cycle) : ctx->context->step_needs(time, cycle);
     pnb_needs answer PNB_NEEDS_INIT;
     answer.renders = needs.renders ? 1 : 0;
     answer.stores = needs.stores ? 1 : 0;
@@ -282,7 +295,10 @@ const char* pnb_needed_field(pnb_context ctx, int index) {
 
 pnb_status pnb_finalize(pnb_context ctx) {
   if (!ctx) return null_context("pnb_finalize");
-  return guarded(ctx, [&] { ctx->context->finalize(); });
+  return guarded(ctx, [&] {
+    if (ctx->async) ctx->async->finalize();
+    else ctx->context->finalize();
+  });
 }
 
 const char* pnb_last_error(pnb_context ctx) { return ctx ? ctx->last_error.c_str() : t_last_error.c_str(); }
@@ -290,7 +306,8 @@ const char* pnb_last_error(pnb_context ctx) { return ctx ? ctx->last_error.c_str
 void pnb_destroy(pnb_context ctx) {
   if (!ctx) return;
   guarded(ctx, [&] {
-    if (!ctx->context->finalized()) ctx->context->finalize();
+    if (ctx->async && !ctx->async->finalized()) ctx->async->finalize();
+    if (ctx->context && !ctx->context->finalized()) ctx->context->finalize();
   });
   delete ctx;
 }

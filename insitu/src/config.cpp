@@ -457,9 +457,21 @@ void parse_progress(const json& j, const std::string& path, Config& c) {
     c.progress.stderr_every = static_cast<int>(integer(*e, child(path, "stderr_every"), 0, 1 << 30));
 }
 
+void parse_async(const json& j, const std::string& path, Config& c) {
+  if (j.is_boolean()) {
+    c.async.enabled = j.get<bool>();
+    return;
+  }
+  if (!j.is_object()) fail(path, "must be true, false or an object {\"backpressure\": \"wait\" | \"skip\"}");
+  only_keys(j, path, {"backpressure"});
+  c.async.enabled = true;
+  if (const json* b = find(j, "backpressure"))
+    c.async.skip_when_busy = choice(*b, child(path, "backpressure"), {"wait", "skip"}) == "skip";
+}
+
 Config parse_document(const json& j) {
   only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store", "compositing",
-                    "progress"});
+                    "progress", "async"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -488,6 +500,7 @@ Config parse_document(const json& j) {
   if (const json* st = find(j, "store")) c.store = parse_store(*st, "store");
   if (const json* cm = find(j, "compositing")) parse_compositing(*cm, "compositing", c);
   if (const json* pr = find(j, "progress")) parse_progress(*pr, "progress", c);
+  if (const json* as = find(j, "async")) parse_async(*as, "async", c);
   return c;
 }
 

@@ -108,6 +108,14 @@ struct ProgressConfig {
   int stderr_every = 0;  ///< a short line on stderr every Nth rendered step; 0: never
 };
 
+/// "async": steps rendered on a worker thread while the solver goes on (async_runner.h).
+struct AsyncConfig {
+  bool enabled = false;
+  /// A step that renders or stores while the worker is still busy: the solver waits for it
+  /// (false), or the step is skipped and counted (true).
+  bool skip_when_busy = false;
+};
+
 /// The whole configuration. See insitu/README.md for the JSON schema.
 struct Config {
   std::string output_directory;
@@ -128,6 +136,7 @@ struct Config {
   /// rank, naming the rank.
   std::size_t runs_memory_bytes = std::size_t{2} << 30;
   ProgressConfig progress;
+  AsyncConfig async;
   /// The JSON text parse_config read: a store keeps it as config.json, so that views of the run
   /// can be rendered again later with the same fields, transfer functions and lighting.
   std::string text;

@@ -104,6 +104,8 @@ void check_rank_rules(const Config& c) {
   if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
       c.lighting->occlusion.shadows && !c.lighting->lights.empty())
     refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
+  // Its worker would talk to the other ranks from a thread of its own.
+  if (c.async.enabled) refuse("\"async\"");
 }
 
 }  // namespace

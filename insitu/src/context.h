@@ -105,6 +105,8 @@ public:
   /// publish_field's checks alone, storing nothing: false for a field the config does not use,
   /// Error for one it refuses.
   bool check_field(const FieldView& field) const;
+  /// Forgets the fields published with copy = false (execute() does so after every step).
+  void drop_borrowed_fields();
 
   /// What execute(time, cycle) would need, recording nothing: this rank's trigger and store
   /// cadence (every rank that passes the same time and cycle gets the same answer).
@@ -227,7 +229,6 @@ private:
   /// One field through the stages after gathering: prepare, render, composite, write.
   void render_field(std::size_t index, double time, std::int64_t cycle, StepValues& values,
                     std::vector<CinemaDatabase::Row>& rows, double& render_ms);
-  void drop_borrowed_fields();
   void store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures);
 
   Config m_config;

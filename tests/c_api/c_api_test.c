@@ -303,6 +303,39 @@ static void test_step_needs(const char* tmp) {
   pnb_destroy(ctx);
 }
 
+/* "async": the steps handed to a worker; pnb_finalize drains it and every step is in the database. */
+static void test_async(const char* tmp) {
+  char config[1024], csv[700];
+  pnb_context ctx = NULL;
+  pnb_mesh_desc mesh = good_mesh();
+  pnb_field_desc field = good_field("T");
+  pnb_step_stats stats = PNB_STEP_STATS_INIT;
+  FILE* f;
+  int cycle, lines = 0, c;
+  snprintf(config, sizeof config,
+           "{\"output\": {\"directory\": \"%s/async-db\"}, \"image\": {\"width\": 8, \"height\": 8},"
+           " \"cameras\": {\"phi\": [0], \"theta\": [30]}, \"fields\": [{\"name\": \"T\"}],"
+           " \"async\": {\"backpressure\": \"wait\"}}", tmp);
+  expect(pnb_create(config, &ctx), PNB_OK, NULL, NULL, "create async");
+  if (!ctx) return;
+  expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish mesh, async");
+  for (cycle = 0; cycle < 4; ++cycle) {
+    pnb_publish_field(ctx, &field, PNB_BORROW);
+    expect(pnb_execute(ctx, cycle, cycle), PNB_OK, ctx, NULL, "execute, async");
+  }
+  expect(pnb_finalize(ctx), PNB_OK, ctx, NULL, "finalize drains the worker");
+  expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step, async");
+  check(stats.cycle == 3 && stats.skipped_steps == 0, "async: the last step is the last one handed over, none skipped", NULL);
+  pnb_destroy(ctx);
+  snprintf(csv, sizeof csv, "%s/async-db/data.csv", tmp);
+  f = fopen(csv, "r");
+  if (f) {
+    while ((c = fgetc(f)) != EOF) lines += c == '\n';
+    fclose(f);
+  }
+  check(lines == 1 + 4, "async: data.csv lists every step", NULL);
+}
+
 int main(void) {
   char tmp[] = "/tmp/pnb-c-api-XXXXXX";
   char config[1024], csv[700];
@@ -317,6 +350,7 @@ int main(void) {
   test_create_errors(tmp);
   test_null_context();
   test_step_needs(tmp);
+  test_async(tmp);
 
   snprintf(config, sizeof config,
            "{\"output\": {\"directory\": \"%s/db\"}, \"image\": {\"width\": 16, \"height\": 16},"

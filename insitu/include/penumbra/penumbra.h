@@ -144,7 +144,9 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
  * config's trigger fires and appends the images to the Cinema database. A failed step is
  * recorded and skipped; later steps still run. A configured field that was not published for a
  * rendering step gives PNB_INVALID_OPERATION naming it (the other fields are still written);
- * so does a call before any mesh was published. */
+ * so does a call before any mesh was published. With "async" in the config, a step that renders
+ * or stores copies the fields it reads and returns while a worker thread renders it; its failure
+ * is the status of the next pnb_execute or of pnb_finalize, naming its cycle. */
 pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle);
 /* What the last rendering step did (zeros before the first). light_*: the light volume's
  * solve of the last rendered field (lighting model "light-volume"; 0 otherwise): its time, its
@@ -167,8 +169,11 @@ typedef struct {
   double composite_ms;
   double write_ms;
   double other_ms;
+  /* ABI 5: with "async" and "backpressure": "skip", the steps skipped so far because the worker
+   * was still busy (never in the database or the store). */
+  int64_t skipped_steps;
 } pnb_step_stats;
-#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 /* Fills the members of *out that its struct_size holds; PNB_INVALID_ARGUMENT for a NULL out or
  * a struct_size that is not of any version's struct. */
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);

@@ -1,0 +1,164 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// insitu/src/async_runner.cpp
+#include "async_runner.h"
+
+#include <cstring>
+#include <exception>
+#include <utility>
+
+namespace penumbra::insitu {
+
+AsyncRunner::AsyncRunner(std::unique_ptr<Context> context, bool skip_when_busy)
+    : m_context(std::move(context)), m_skip_when_busy(skip_when_busy), m_worker([this] { run(); }) {}
+
+AsyncRunner::~AsyncRunner() {
+  {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    m_wake.wait(lock, [this] { return !m_job; });
+    m_stopping = true;
+  }
+  m_wake.notify_all();
+  m_worker.join();
+}
+
+void AsyncRunner::pack(const FieldView& field, FieldCopy& copy) {
+  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
+  copy.bytes.resize(item * field.values.count);
+  for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&copy.bytes[i * item], field.values.at(i), item);
+  copy.view = field;
+  copy.view.values = {copy.bytes.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
+}
+
+void AsyncRunner::publish_mesh(const MeshView& mesh) {
+  wait_idle();
+  const std::size_t before = m_context->mesh_preparations();
+  m_context->publish_mesh(mesh);
+  // Fields were sized for the old mesh.
+  if (m_context->mesh_preparations() != before) {
+    m_copied.clear();
+    m_borrowed.clear();
+  }
+}
+
+void AsyncRunner::publish_field(const FieldView& field, bool copy) {
+  if (!m_context->check_field(field)) return;
+  if (copy) {
+    pack(field, m_copied[field.name]);
+    m_borrowed.erase(field.name);
+  } else {
+    m_borrowed[field.name] = field;
+    m_copied.erase(field.name);
+  }
+}
+
+StepNeeds AsyncRunner::step_needs(double time, std::int64_t cycle) const { return m_context->step_needs(time, cycle); }
+
+bool AsyncRunner::execute(double time, std::int64_t cycle) {
+  struct ForgetBorrowed {
+    std::map<std::string, FieldView>& fields;
+    ~ForgetBorrowed() { fields.clear(); }
+  } forget{m_borrowed};
+  std::map<std::string, FieldView> published = m_borrowed;
+  for (const auto& [name, copy] : m_copied) published.emplace(name, copy.view);
+  const StepNeeds needs = m_context->step_needs(time, cycle);
+  const StepDecision decision = m_context->decide_step(time, cycle, published);
+  const bool work = decision.renders || needs.stores;
+  bool handed_over = false;
+  std::optional<Error> earlier;  // an earlier step's failure: this step's own is the next call's
+  if (work && busy() && m_skip_when_busy) {
+    ++m_skipped;
+  } else if (work) {
+    handed_over = true;
+    wait_idle();
+    earlier = take_failure();
+    Job job;
+    job.time = time;
+    job.cycle = cycle;
+    job.decision = decision;
+    std::vector<FieldCopy> buffers;
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      buffers = std::move(m_spare);
+    }
+    // A field the step reads but nobody published is the worker's to report, as execute() does.
+    for (const std::string& name : needs.fields) {
+      const auto it = published.find(name);
+      if (it == published.end()) continue;
+      job.fields.emplace_back();
+      if (!buffers.empty()) {
+        job.fields.back() = std::move(buffers.back());
+        buffers.pop_back();
+      }
+      pack(it->second, job.fields.back());
+    }
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      m_job = std::move(job);
+    }
+    m_wake.notify_all();
+  }
+  if (!handed_over) earlier = take_failure();
+  if (earlier) throw *earlier;
+  if (!work && !decision.failure.empty()) throw Error(decision.code, decision.failure);
+  return handed_over && decision.renders;
+}
+
+StepStats AsyncRunner::last_step() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_last_step;
+}
+
+void AsyncRunner::finalize() {
+  wait_idle();
+  m_context->finalize();
+  if (std::optional<Error> failure = take_failure()) throw *failure;
+}
+
+void AsyncRunner::run() {
+  for (;;) {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    m_wake.wait(lock, [this] { return m_stopping || m_job; });
+    if (!m_job) return;
+    Job& job = *m_job;  // the solver's thread leaves it alone until it is reset
+    lock.unlock();
+    std::optional<Error> failure;
+    try {
+      for (const FieldCopy& f : job.fields) m_context->publish_field(f.view, false);
+      m_context->run_step(job.time, job.cycle, job.decision);
+    } catch (const Error& e) {
+      failure = Error(e.code(), e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)");
+    } catch (const std::bad_alloc&) {
+      failure = Error(ErrorCode::out_of_memory, "out of memory (cycle " + std::to_string(job.cycle) + ", rendered asynchronously)");
+    } catch (const std::exception& e) {
+      failure = Error(ErrorCode::internal_error, e.what());
+    }
+    m_context->drop_borrowed_fields();
+    const StepStats stats = m_context->last_step();
+    lock.lock();
+    if (failure) m_failure = failure;  // the latest: the next call reports one, naming its cycle
+    m_last_step = stats;
+    m_spare = std::move(job.fields);
+    m_job.reset();
+    lock.unlock();
+    m_wake.notify_all();
+  }
+}
+
+void AsyncRunner::wait_idle() {
+  std::unique_lock<std::mutex> lock(m_mutex);
+  m_wake.wait(lock, [this] { return !m_job; });
+}
+
+bool AsyncRunner::busy() {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  return m_job.has_value();
+}
+
+std::optional<Error> AsyncRunner::take_failure() {
+  std::optional<Error> failure;
+  std::lock_guard<std::mutex> lock(m_mutex);
+  failure.swap(m_failure);
+  return failure;
+}
+
+}  // namespace penumbra::insitu

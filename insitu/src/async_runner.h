@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// insitu/src/async_runner.h -- "async": a context's steps rendered on a worker thread
+#pragma once
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "context.h"
+
+namespace penumbra::insitu {
+
+/// Runs a Context's steps on a worker thread. On the solver's thread, execute() decides the step
+/// (the trigger, as Context::decide_step) and, when it renders or stores, copies the fields it
+/// reads into buffers reused across steps and hands them to the worker, which records, renders,
+/// writes and commits them (Context::run_step) while the solver goes on. One step at a time: a
+/// step that needs the worker while it is busy waits for it, or with skip_when_busy is skipped
+/// and counted (the database and the store never see it). A worker's failure is thrown by the
+/// next execute() (after that step is handed over) or by finalize(). The mesh is published with
+/// the worker idle. Every method is called from one thread (the solver's); the Context is used
+/// by the worker only between a hand-over and its completion.
+class AsyncRunner {
+public:
+  AsyncRunner(std::unique_ptr<Context> context, bool skip_when_busy);
+  /// Drains the worker (its failure, if any, is lost: call finalize() to see it) and joins it.
+  ~AsyncRunner();
+  AsyncRunner(const AsyncRunner&) = delete;
+  AsyncRunner& operator=(const AsyncRunner&) = delete;
+
+  void publish_mesh(const MeshView& mesh);
+  /// Checked now (Context::check_field); borrowed fields are read by the next execute(), copied
+  /// ones kept until replaced or the topology changes, as with a Context.
+  void publish_field(const FieldView& field, bool copy);
+  /// Returns whether the step renders (handed to the worker, which renders it; false for a step
+  /// skipped because the worker was busy).
+  bool execute(double time, std::int64_t cycle);
+  StepNeeds step_needs(double time, std::int64_t cycle) const;
+  /// The last step the worker completed.
+  StepStats last_step() const;
+  std::int64_t skipped_steps() const { return m_skipped; }
+  /// Waits for the worker, throws its failure if it had one, and finalizes the context.
+  void finalize();
+  bool finalized() const { return m_context->finalized(); }
+
+private:
+  /// A field as the worker reads it: its values packed into a buffer kept across steps.
+  struct FieldCopy {
+    FieldView view;
+    std::vector<std::byte> bytes;
+  };
+  struct Job {
+    double time = 0;
+    std::int64_t cycle = 0;
+    StepDecision decision;
+    std::vector<FieldCopy> fields;
+  };
+  void run();
+  void wait_idle();
+  bool busy();
+  /// The worker's failure not yet reported, taken.
+  std::optional<Error> take_failure();
+  /// Packs `field` into `copy`, reusing its buffer.
+  static void pack(const FieldView& field, FieldCopy& copy);
+
+  std::unique_ptr<Context> m_context;
+  bool m_skip_when_busy;
+  std::map<std::string, FieldCopy> m_copied;     ///< published with copy = true
+  std::map<std::string, FieldView> m_borrowed;   ///< published with copy = false, for the next step
+  std::int64_t m_skipped = 0;
+
+  mutable std::mutex m_mutex;
+  std::condition_variable m_wake;
+  std::optional<Job> m_job;        ///< handed over, not yet completed
+  std::vector<FieldCopy> m_spare;  ///< buffers of the last completed job, reused
+  std::optional<Error> m_failure;  ///< the worker's, not yet thrown
+  StepStats m_last_step;
+  bool m_stopping = false;
+  std::thread m_worker;
+};
+
+}  // namespace penumbra::insitu
