@@ -5,9 +5,48 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include <mutex>
 #include <unordered_map>
 
 namespace penumbra::render {
+namespace {
+
+// OpenMesh prints a line per refused triangle; the surface counts them instead, so its error
+// stream is muted while surfaces are built and restored for the host program afterwards. The
+// stream's switch is one global: contexts on several threads build surfaces at once, so the
+// first builder mutes it and the last one restores it, under one lock.
+class MutedOpenMeshErrors {
+public:
+  MutedOpenMeshErrors() {
+    std::lock_guard<std::mutex> lock(mutex());
+    if (state().builders++ == 0) {
+      state().was_enabled = omerr().is_enabled();
+      omerr().disable();
+    }
+  }
+  ~MutedOpenMeshErrors() {
+    std::lock_guard<std::mutex> lock(mutex());
+    if (--state().builders == 0 && state().was_enabled) omerr().enable();
+  }
+  MutedOpenMeshErrors(const MutedOpenMeshErrors&) = delete;
+  MutedOpenMeshErrors& operator=(const MutedOpenMeshErrors&) = delete;
+
+private:
+  struct State {
+    int builders = 0;
+    bool was_enabled = true;
+  };
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static State& state() {
+    static State s;
+    return s;
+  }
+};
+
+}  // namespace
 
 struct BoundarySurface::Impl {
   OpenMesh::TriMesh_ArrayKernelT<> mesh;
@@ -27,17 +66,13 @@ BoundarySurface::BoundarySurface(const std::vector<Vec3d>& points,
     handle.emplace(id, h);
     return h;
   };
-  // OpenMesh prints a line per refused triangle; the count below carries that information, so
-  // its error stream is muted while the surface is built (and restored for the host program).
-  const bool was_enabled = omerr().is_enabled();
-  omerr().disable();
+  const MutedOpenMeshErrors muted;
   for (const auto& t : triangles) {
     // add_face refuses triangles that would make a non-manifold vertex or edge (two bodies
     // touching at a point); those are counted, not fatal: the renderer does not need them here.
     const auto f = m.add_face(vertex(t[0]), vertex(t[1]), vertex(t[2]));
     if (!f.is_valid()) ++m_rejected;
   }
-  if (was_enabled) omerr().enable();
 }
 
 BoundarySurface::~BoundarySurface() = default;
