@@ -60,24 +60,17 @@ private:
   void expect(const std::string& token) {
     if (!accept(token)) fail("expected '" + token + "'");
   }
-  std::shared_ptr<const Node> any() {
-    auto first = all();
-    if (!accept("or")) return first;
+  // `or` joins `and` groups, which join comparisons: and binds first.
+  std::shared_ptr<const Node> any() { return joined(Node::Kind::any, "or", &Parser::all); }
+  std::shared_ptr<const Node> all() { return joined(Node::Kind::all, "and", &Parser::compare); }
+  std::shared_ptr<const Node> joined(Node::Kind kind, const char* word, std::shared_ptr<const Node> (Parser::*part)()) {
+    auto first = (this->*part)();
+    if (!accept(word)) return first;
     auto n = std::make_shared<Node>();
-    n->kind = Node::Kind::any;
+    n->kind = kind;
     n->children.push_back(first);
-    do n->children.push_back(all());
-    while (accept("or"));
-    return n;
-  }
-  std::shared_ptr<const Node> all() {
-    auto first = compare();
-    if (!accept("and")) return first;
-    auto n = std::make_shared<Node>();
-    n->kind = Node::Kind::all;
-    n->children.push_back(first);
-    do n->children.push_back(compare());
-    while (accept("and"));
+    do n->children.push_back((this->*part)());
+    while (accept(word));
     return n;
   }
   std::shared_ptr<const Node> compare() {
