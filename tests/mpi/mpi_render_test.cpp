@@ -145,14 +145,17 @@ bool same_pictures(const std::string& dir, const std::string& reference, bool fa
 }
 
 // What a run over several ranks refuses at creation, with a message naming it: image-space
-// occlusion with shadows (its gaps start at every ray sample). pnb_create_mpi fails on every rank.
-int refused(const std::string& dir, const std::string& backend, int rank) {
-  const std::string c = config(dir, "occlusion-image", backend, false);
+// occlusion with shadows (its gaps start at every ray sample), and "async" (its worker would
+// talk to the other ranks from a thread of its own). pnb_create_mpi fails on every rank.
+int refused(const std::string& dir, const std::string& backend, int rank, bool async) {
+  std::string c = config(dir, async ? "none" : "occlusion-image", backend, false);
+  if (async) c.insert(c.rfind('}'), R"(, "async": true)");
+  const std::string named = async ? "\"async\" is not available" : "\"image\" with shadows";
   pnb_context ctx = nullptr;
   const pnb_status s = pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx);
   const std::string text = pnb_last_error(nullptr);
-  int good = s != PNB_OK && ctx == nullptr && text.find("\"image\" with shadows") != std::string::npos ? 1 : 0;
-  if (!good) std::fprintf(stderr, "rank %d: expected pnb_create_mpi to refuse image-space shadows, got %d: %s\n", rank, int(s), text.c_str());
+  int good = s != PNB_OK && ctx == nullptr && text.find(named) != std::string::npos ? 1 : 0;
+  if (!good) std::fprintf(stderr, "rank %d: expected pnb_create_mpi to refuse %s, got %d: %s\n", rank, named.c_str(), int(s), text.c_str());
   if (ctx) pnb_destroy(ctx);
   int all = 0;
   MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
@@ -261,7 +264,8 @@ int main(int argc, char** argv) {
   const std::string dir = out + "/ranks", reference = out + "/serial";
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
-  if (lighting == "occlusion-image-refused") return refused(dir, backend, rank);
+  if (lighting == "occlusion-image-refused") return refused(dir, backend, rank, false);
+  if (lighting == "async-refused") return refused(dir, backend, rank, true);
   if (lighting == "when-trigger") return when_trigger(dir, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
 
