@@ -2,6 +2,7 @@
 // insitu/src/async_runner.cpp
 #include "async_runner.h"
 
+#include <chrono>
 #include <cstring>
 #include <exception>
 #include <utility>
@@ -54,6 +55,14 @@ void AsyncRunner::publish_field(const FieldView& field, bool copy) {
 StepNeeds AsyncRunner::step_needs(double time, std::int64_t cycle) const { return m_context->step_needs(time, cycle); }
 
 bool AsyncRunner::execute(double time, std::int64_t cycle) {
+  // The solver's time inside the call, for the adaptive cadence: what it waits, not the worker's.
+  struct Account {
+    Context& context;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ~Account() {
+      context.account_execute(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    }
+  } account{*m_context};
   struct ForgetBorrowed {
     std::map<std::string, FieldView>& fields;
     ~ForgetBorrowed() { fields.clear(); }

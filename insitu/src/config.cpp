@@ -248,7 +248,7 @@ FieldConfig parse_field(const json& j, const std::string& path) {
 }
 
 void parse_trigger(const json& j, const std::string& path, Config& c) {
-  only_keys(j, path, {"every_cycles", "every_time", "when"});
+  only_keys(j, path, {"every_cycles", "every_time", "when", "max_share"});
   c.trigger = {};
   if (const json* n = find(j, "every_cycles"))
     c.trigger.every_cycles = integer(*n, child(path, "every_cycles"), 1, std::numeric_limits<std::int64_t>::max());
@@ -257,6 +257,10 @@ void parse_trigger(const json& j, const std::string& path, Config& c) {
     if (c.trigger.every_time <= 0) fail(child(path, "every_time"), "must be > 0");
   }
   if (const json* w = find(j, "when")) c.trigger.when = TriggerExpression(string(*w, child(path, "when")), child(path, "when"));
+  if (const json* m = find(j, "max_share")) {
+    c.trigger.max_share = number(*m, child(path, "max_share"));
+    if (!(c.trigger.max_share > 0 && c.trigger.max_share <= 1)) fail(child(path, "max_share"), "must be in (0, 1]");
+  }
   if (c.trigger.every_cycles == 0 && c.trigger.every_time == 0 && !c.trigger.when)
     fail(path, "needs every_cycles, every_time and/or when");
 }

@@ -63,6 +63,9 @@ struct TriggerConfig {
   std::int64_t every_cycles = 0;  ///< 0 = not used
   double every_time = 0.0;        ///< 0 = not used
   std::optional<TriggerExpression> when;
+  /// Adaptive cadence: a step the rules above render is left out while the solver's time inside
+  /// pnb_execute exceeds this share of its wall time since the first step; 0 = not used.
+  double max_share = 0.0;
 };
 
 /// Cone-traced directional occlusion and shadows (insitu/README.md, "lighting.occlusion").

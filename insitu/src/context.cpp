@@ -647,7 +647,37 @@ bool Context::execute(double time, std::int64_t cycle) {
   } drop{this};
   std::map<std::string, FieldView> published;
   for (const auto& [name, held] : m_fields) published.emplace(name, held.view);
-  return run_step(time, cycle, decide_step(time, cycle, published));
+  const auto t0 = Clock::now();
+  bool rendered = false;
+  try {
+    rendered = run_step(time, cycle, decide_step(time, cycle, published));
+  } catch (...) {
+    account_execute(ms_since(t0));
+    throw;
+  }
+  account_execute(ms_since(t0));
+  return rendered;
+}
+
+void Context::account_execute(double inside_ms) {
+  if (m_config.trigger.max_share <= 0) return;
+  const auto now = Clock::now();
+  // The clock starts as the first step returns: from then on the solver's own time is seen too.
+  if (!m_first_execute) {
+    m_first_execute = now;
+    return;
+  }
+  m_inside_ms += inside_ms;
+  const double wall = std::chrono::duration<double, std::milli>(now - *m_first_execute).count();
+  double share = wall > 0 ? m_inside_ms / wall : 0;
+  // The largest share over the ranks, so that every rank leaves out the same steps.
+  if (m_group->size() > 1) {
+    double negative = -share;
+    m_group->minimum(&negative, 1);
+    share = -negative;
+  }
+  m_share = share;
+  m_trigger.observe_share(share);
 }
 
 StepDecision Context::decide_step(double time, std::int64_t cycle, const std::map<std::string, FieldView>& fields) {

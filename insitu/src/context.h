@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/context.h -- the in-situ runtime behind the C API
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <exception>
 #include <map>
@@ -101,6 +102,14 @@ public:
   /// decision renders, renders, writes and commits it from the fields published to this context.
   StepDecision decide_step(double time, std::int64_t cycle, const std::map<std::string, FieldView>& fields);
   bool run_step(double time, std::int64_t cycle, const StepDecision& decision);
+
+  /// Time the solver spent inside one pnb_execute, for the adaptive cadence ("trigger":
+  /// {"max_share"}): the share of its wall time since the first step returned, over ranks the
+  /// largest (collective when max_share is set). execute() accounts its own; an asynchronous
+  /// runner its.
+  void account_execute(double inside_ms);
+  /// The last share account_execute found (0 without max_share).
+  double execute_share() const { return m_share; }
 
   /// publish_field's checks alone, storing nothing: false for a field the config does not use,
   /// Error for one it refuses.
@@ -242,6 +251,8 @@ private:
   std::map<std::string, HeldField> m_fields;
   std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry
   StepStats m_last_step;
+  std::optional<std::chrono::steady_clock::time_point> m_first_execute;  ///< the adaptive cadence's start
+  double m_inside_ms = 0, m_share = 0;
   std::size_t m_preparations = 0;
   std::size_t m_geometry_updates = 0;
   bool m_finalized = false;

@@ -23,6 +23,9 @@ namespace penumbra::insitu {
 ///   step observed (the step before: so that pnb_step_needs knows before the solver builds its
 ///   arrays, and pnb_execute decides the same); change() is measured from the statistics with
 ///   which it last fired. Before any step was observed it does not fire.
+/// With max_share, a step these rules render is left out while the share of the solver's wall
+/// time spent inside pnb_execute, as observed after the last step, exceeds it (an adaptive
+/// cadence: renders resume as the share falls).
 class Trigger {
 public:
   explicit Trigger(const TriggerConfig& config) : m_config(config) {}
@@ -30,8 +33,9 @@ public:
   /// True when the step (time, cycle) renders; records it for the time rule.
   bool fires(double time, std::int64_t cycle) {
     const bool fire = would_fire(time, cycle);
-    if (m_config.every_time > 0 && by_time(time)) m_last_interval = interval(time);
-    if (by_statistics()) m_at_last_fire = m_latest;
+    // A step left out for the share is not recorded: the next one may take its place.
+    if (fire && m_config.every_time > 0 && by_time(time)) m_last_interval = interval(time);
+    if (fire && by_statistics()) m_at_last_fire = m_latest;
     return fire;
   }
 
@@ -50,12 +54,17 @@ public:
       const std::int64_t n = m_config.every_cycles;
       fire = ((cycle % n) + n) % n == 0;
     }
-    return fire || (m_config.every_time > 0 && by_time(time)) || by_statistics();
+    fire = fire || (m_config.every_time > 0 && by_time(time)) || by_statistics();
+    return fire && !over_share();
   }
+
+  /// The share of the solver's wall time spent inside pnb_execute so far, for the next decisions.
+  void observe_share(double share) { m_share = share; }
 
 private:
   double interval(double time) const { return std::floor(time / m_config.every_time + 1e-9); }
   bool by_time(double time) const { return !m_last_interval || interval(time) > *m_last_interval; }
+  bool over_share() const { return m_config.max_share > 0 && m_share > m_config.max_share; }
   bool by_statistics() const {
     return m_config.when && m_latest && m_config.when->holds(*m_latest, m_at_last_fire ? &*m_at_last_fire : nullptr);
   }
@@ -63,6 +72,7 @@ private:
   TriggerConfig m_config;
   std::optional<double> m_last_interval;
   std::optional<StatsByField> m_latest, m_at_last_fire;
+  double m_share = 0;
 };
 
 }  // namespace penumbra::insitu

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <thread>
 #include <cmath>
 
 #include "cinema_database.h"
@@ -464,6 +465,42 @@ TEST(Context, TriggerWhenIsCheckedWhenTheConfigIsRead) {
     EXPECT_NE(std::string(e.what()).find("config: trigger.when: "), std::string::npos) << e.what();
   }
   EXPECT_THROW(parse_config(testing::small_config("/tmp/x", R"([{"name": "T"}])", R"(, "trigger": {"when": 3})")), Error);
+}
+
+}  // namespace
+}  // namespace penumbra::insitu
+
+namespace penumbra::insitu {
+namespace {
+
+// "max_share": the share is measured from the first step's return on. A solver that spends no
+// time of its own between steps is then above any share after its second image and renders no
+// more; one that spends 60 ms per step keeps rendering.
+TEST(Context, MaxShareThinsTheImagesOfASolverThatDoesLittleElse) {
+  const auto mesh = fixtures::block(BlockCells::tets, 2, 2, 2, {0, 0, 0}, {1, 1, 1});
+  const auto t = fixtures::sample(mesh, [](double x, double y, double) { return x + y; });
+  for (const int solver_ms : {0, 60}) {
+    TempDir tmp;
+    Context ctx(parse_config(testing::small_config(tmp / "db", R"([{"name": "T"}])",
+                                                   R"(, "trigger": {"every_cycles": 1, "max_share": 0.5})")));
+    ctx.publish_mesh(mesh.view());
+    int rendered = 0;
+    for (int k = 0; k < 4; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(solver_ms));
+      ctx.publish_field(fixtures::point_field("T", t), false);
+      const bool asked = ctx.step_needs(k, k).renders;
+      const bool did = ctx.execute(k, k);
+      EXPECT_EQ(asked, did) << "solver " << solver_ms << " ms, step " << k;
+      rendered += did;
+    }
+    if (solver_ms == 0) {
+      EXPECT_EQ(rendered, 2);
+      EXPECT_GT(ctx.execute_share(), 0.5);
+    } else {
+      EXPECT_EQ(rendered, 4);
+      EXPECT_LT(ctx.execute_share(), 0.5);
+    }
+  }
 }
 
 }  // namespace

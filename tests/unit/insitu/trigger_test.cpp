@@ -128,3 +128,23 @@ TEST(Trigger, WhenDecidesFromTheStepBeforeAndChangeFromTheLastFiring) {
 
 }  // namespace
 }  // namespace penumbra::insitu
+
+namespace penumbra::insitu {
+namespace {
+
+TEST(Trigger, MaxShareLeavesStepsOutWhileTheShareIsAboveIt) {
+  TriggerConfig c;
+  c.every_time = 1.0;
+  c.max_share = 0.2;
+  Trigger t(c);
+  EXPECT_TRUE(t.fires(0.0, 0));
+  t.observe_share(0.5);
+  EXPECT_FALSE(t.would_fire(1.0, 1));
+  EXPECT_FALSE(t.fires(1.0, 1));  // left out, and not recorded:
+  t.observe_share(0.1);
+  EXPECT_TRUE(t.fires(1.5, 2));   // the same interval's next step takes its place
+  EXPECT_FALSE(t.fires(1.7, 3));  // and the interval is then used
+}
+
+}  // namespace
+}  // namespace penumbra::insitu
