@@ -142,6 +142,31 @@ TEST(StoreView, TheLightVolumeIsSolvedAgainAsTheRunSolvedIt) {
   EXPECT_GT(render::rms_difference_pct(decoded(view.render(unlit).png, r.tmp.path), run_image(r.tmp.path, 5, 90)), 0.5);
 }
 
+// A mesh whose points move, lit by occlusion: each step's coordinates are read back, the
+// occlusion made again for them, and the stored cameras still give the run's images.
+TEST(StoreView, MovingPointsWithOcclusionFollowEachStep) {
+  TempDir tmp;
+  const std::string config = run_config(tmp.path, R"(, "lighting": {"model": "occlusion", "occlusion": {"grid": 24}})");
+  {
+    auto mesh = fixtures::block(fixtures::BlockCells::tets, 6, 5, 4, {0, 0, 0}, {1.2, 1, 0.8});
+    insitu::Context ctx(insitu::parse_config(config));
+    for (int step = 0; step < 4; ++step) {
+      if (step > 0) fixtures::swirl(mesh, {0.6, 0.5, 0}, 0.6, 0.05);
+      ctx.publish_mesh(mesh.view());
+      const auto v = wave(mesh, 0.4 * step);
+      ctx.publish_field(fixtures::point_field("T", v), false);
+      ctx.execute(0.4 * step, step);
+    }
+    ctx.finalize();
+  }
+  StoreView view((tmp.path / "store").string(), config);
+  for (int step : {0, 3, 1}) {
+    const auto png = view.render(at(step, 90)).png;
+    // Coordinates kept within 1/64 of the thinnest altitude: a level or two on silhouettes.
+    EXPECT_LT(render::rms_difference_pct(decoded(png, tmp.path), run_image(tmp.path, step, 90)), 0.5) << "step " << step;
+  }
+}
+
 TEST(StoreView, FreeCameraZoomAndTransferFunction) {
   const StoredRun r;
   StoreView view(r.store(), r.config);

@@ -136,7 +136,7 @@ void StoreView::Impl::move_points_to(std::size_t local_step) {
   renderer->move_points(tets);
   for (auto& lv : light_volumes)
     if (lv) lv->move_points(tets);
-  occlusions.clear();  // made again for the moved points
+  for (auto& occ : occlusions) occ.reset();  // made again for the moved points
   light_keys.assign(light_keys.size(), "");
   points_step = local_step;
 }
