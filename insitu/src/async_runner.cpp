@@ -3,9 +3,10 @@
 #include "async_runner.h"
 
 #include <chrono>
-#include <cstring>
 #include <exception>
 #include <utility>
+
+#include "penumbra/core/elapsed.h"
 
 namespace penumbra::insitu {
 
@@ -22,14 +23,6 @@ AsyncRunner::~AsyncRunner() {
   m_worker.join();
 }
 
-void AsyncRunner::pack(const FieldView& field, FieldCopy& copy) {
-  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
-  copy.bytes.resize(item * field.values.count);
-  for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&copy.bytes[i * item], field.values.at(i), item);
-  copy.view = field;
-  copy.view.values = {copy.bytes.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
-}
-
 void AsyncRunner::publish_mesh(const MeshView& mesh) {
   wait_idle();
   const std::size_t before = m_context->mesh_preparations();
@@ -44,7 +37,8 @@ void AsyncRunner::publish_mesh(const MeshView& mesh) {
 void AsyncRunner::publish_field(const FieldView& field, bool copy) {
   if (!m_context->check_field(field)) return;
   if (copy) {
-    pack(field, m_copied[field.name]);
+    FieldCopy& copy = m_copied[field.name];
+    copy.view = packed_copy(field, copy.bytes);
     m_borrowed.erase(field.name);
   } else {
     m_borrowed[field.name] = field;
@@ -59,9 +53,7 @@ bool AsyncRunner::execute(double time, std::int64_t cycle) {
   struct Account {
     Context& context;
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-    ~Account() {
-      context.account_execute(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    }
+    ~Account() { context.account_execute(ms_since(start)); }
   } account{*m_context};
   struct ForgetBorrowed {
     std::map<std::string, FieldView>& fields;
@@ -80,26 +72,7 @@ bool AsyncRunner::execute(double time, std::int64_t cycle) {
     handed_over = true;
     wait_idle();
     earlier = take_failure();
-    Job job;
-    job.time = time;
-    job.cycle = cycle;
-    job.decision = decision;
-    std::vector<FieldCopy> buffers;
-    {
-      std::lock_guard<std::mutex> lock(m_mutex);
-      buffers = std::move(m_spare);
-    }
-    // A field the step reads but nobody published is the worker's to report, as execute() does.
-    for (const std::string& name : needs.fields) {
-      const auto it = published.find(name);
-      if (it == published.end()) continue;
-      job.fields.emplace_back();
-      if (!buffers.empty()) {
-        job.fields.back() = std::move(buffers.back());
-        buffers.pop_back();
-      }
-      pack(it->second, job.fields.back());
-    }
+    Job job{time, cycle, decision, copies_of(needs.fields, published)};
     {
       std::lock_guard<std::mutex> lock(m_mutex);
       m_job = std::move(job);
@@ -110,6 +83,27 @@ bool AsyncRunner::execute(double time, std::int64_t cycle) {
   if (earlier) throw *earlier;
   if (!work && !decision.failure.empty()) throw Error(decision.code, decision.failure);
   return handed_over && decision.renders;
+}
+
+std::vector<AsyncRunner::FieldCopy> AsyncRunner::copies_of(const std::vector<std::string>& names,
+                                                             const std::map<std::string, FieldView>& published) {
+  std::vector<FieldCopy> buffers, copies;
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    buffers = std::move(m_spare);
+  }
+  // A field the step reads but nobody published is the worker's to report, as execute() does.
+  for (const std::string& name : names) {
+    const auto it = published.find(name);
+    if (it == published.end()) continue;
+    FieldCopy& copy = copies.emplace_back();
+    if (!buffers.empty()) {
+      copy = std::move(buffers.back());
+      buffers.pop_back();
+    }
+    copy.view = packed_copy(it->second, copy.bytes);
+  }
+  return copies;
 }
 
 StepStats AsyncRunner::last_step() const {

@@ -65,8 +65,8 @@ private:
   bool busy();
   /// The worker's failure not yet reported, taken.
   std::optional<Error> take_failure();
-  /// Packs `field` into `copy`, reusing its buffer.
-  static void pack(const FieldView& field, FieldCopy& copy);
+  /// Copies of the `names` that were published, in the last job's buffers where there are some.
+  std::vector<FieldCopy> copies_of(const std::vector<std::string>& names, const std::map<std::string, FieldView>& published);
 
   std::unique_ptr<Context> m_context;
   bool m_skip_when_busy;

@@ -335,16 +335,19 @@ bool Context::points_moved(const MeshView& mesh) const {
   return false;
 }
 
+FieldView packed_copy(const FieldView& field, std::vector<std::byte>& bytes) {
+  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
+  bytes.resize(item * field.values.count);
+  for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&bytes[i * item], field.values.at(i), item);
+  FieldView copy = field;
+  copy.values = {bytes.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
+  return copy;
+}
+
 void Context::publish_field(const FieldView& field, bool copy) {
   if (!check_field(field)) return;
-  const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
   HeldField held;
-  held.view = field;
-  if (copy) {
-    held.owned.resize(item * field.values.count);
-    for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&held.owned[i * item], field.values.at(i), item);
-    held.view.values = {held.owned.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
-  }
+  held.view = copy ? packed_copy(field, held.owned) : field;
   m_fields[field.name] = std::move(held);
 }
 
@@ -645,8 +648,10 @@ bool Context::execute(double time, std::int64_t cycle) {
     Context* c;
     ~DropBorrowed() { c->drop_borrowed_fields(); }
   } drop{this};
+  // The trigger's statistics read the published fields by name; without them nothing does.
   std::map<std::string, FieldView> published;
-  for (const auto& [name, held] : m_fields) published.emplace(name, held.view);
+  if (!m_trigger.watched_fields().empty())
+    for (const auto& [name, held] : m_fields) published.emplace(name, held.view);
   const auto t0 = Clock::now();
   bool rendered = false;
   try {
@@ -761,7 +766,7 @@ void Context::log_progress(double time, std::uint64_t bytes_before, StepFailures
 
 void Context::observe_trigger_statistics(std::int64_t cycle, const std::map<std::string, FieldView>& fields,
                                          StepFailures& failures) {
-  const std::vector<std::string> names = m_trigger.watched_fields();
+  const std::vector<std::string>& names = m_trigger.watched_fields();
   if (names.empty()) return;
   // Per field: min, -max (both reduced by minimum), then the finite values' sum and count.
   std::vector<double> extremes, sums;

@@ -52,6 +52,9 @@ struct StepDecision {
   ErrorCode code = ErrorCode::ok;
 };
 
+/// `field`'s values packed into `bytes` (its buffer reused), and the view of that copy.
+FieldView packed_copy(const FieldView& field, std::vector<std::byte>& bytes);
+
 /// What execute(time, cycle) would read, decided as execute() decides.
 struct StepNeeds {
   bool renders = false;  ///< the trigger fires

@@ -42,9 +42,7 @@ public:
   /// The statistics of a step's `when` fields, for the next decisions.
   void observe(StatsByField stats) { m_latest = std::move(stats); }
   /// The fields `when` reads (none without it).
-  std::vector<std::string> watched_fields() const {
-    return m_config.when ? m_config.when->fields() : std::vector<std::string>{};
-  }
+  const std::vector<std::string>& watched_fields() const { return m_config.when ? m_config.when->fields() : m_none; }
 
   /// What fires() would answer for the step, recording nothing (pnb_step_needs asks it before
   /// the solver builds its arrays).
@@ -73,6 +71,7 @@ private:
   std::optional<double> m_last_interval;
   std::optional<StatsByField> m_latest, m_at_last_fire;
   double m_share = 0;
+  std::vector<std::string> m_none;
 };
 
 }  // namespace penumbra::insitu

@@ -22,6 +22,7 @@
 #include "render_queue.h"
 #include "render_routes.h"
 #include "store_view.h"
+#include "test_util.h"
 #include "view_server.h"
 
 namespace penumbra::viewer {
@@ -29,17 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "pnb-store-view-XXXXXX").string();
-    path = ::mkdtemp(pattern.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using insitu::testing::TempDir;
 
 // A field moving through the block over time.
 std::vector<double> wave(const fixtures::OwnedMesh& mesh, double t) {
@@ -96,8 +87,9 @@ std::vector<unsigned char> decoded(const std::vector<unsigned char>& png, const 
 struct StoredRun {
   TempDir tmp;
   std::string config;
-  explicit StoredRun(const std::string& lighting = "") : config(run_config(tmp.path, lighting)) { run(tmp.path, config); }
-  std::string store() const { return (tmp.path / "store").string(); }
+  explicit StoredRun(const std::string& lighting = "") : config(run_config(dir(), lighting)) { run(dir(), config); }
+  fs::path dir() const { return tmp.path(); }
+  std::string store() const { return (dir() / "store").string(); }
 };
 
 ViewRequest at(std::size_t step, double phi, double theta = 30) {
@@ -119,7 +111,7 @@ TEST(StoreView, StoredCamerasGiveTheRunsImages) {
     for (int phi : {0, 90}) {
       const auto png = view.render(at(step, phi)).png;
       // Stored values within 1e-6 of the run's: a pixel may round to the next level, no more.
-      EXPECT_LT(render::rms_difference_pct(decoded(png, r.tmp.path), run_image(r.tmp.path, step, phi)), 0.2)
+      EXPECT_LT(render::rms_difference_pct(decoded(png, r.dir()), run_image(r.dir(), step, phi)), 0.2)
           << "step " << step << " phi " << phi;
     }
 }
@@ -134,19 +126,20 @@ TEST(StoreView, TheLightVolumeIsSolvedAgainAsTheRunSolvedIt) {
     const RenderedView v = view.render(at(step, 90));
     EXPECT_TRUE(v.light_converged);
     // Both converged to the light volume's tolerance from different starts.
-    EXPECT_LT(render::rms_difference_pct(decoded(v.png, r.tmp.path), run_image(r.tmp.path, step, 90)), 0.5)
+    EXPECT_LT(render::rms_difference_pct(decoded(v.png, r.dir()), run_image(r.dir(), step, 90)), 0.5)
         << "step " << step;
   }
   ViewRequest unlit = at(5, 90);
   unlit.lit = false;
-  EXPECT_GT(render::rms_difference_pct(decoded(view.render(unlit).png, r.tmp.path), run_image(r.tmp.path, 5, 90)), 0.5);
+  EXPECT_GT(render::rms_difference_pct(decoded(view.render(unlit).png, r.dir()), run_image(r.dir(), 5, 90)), 0.5);
 }
 
 // A mesh whose points move, lit by occlusion: each step's coordinates are read back, the
 // occlusion made again for them, and the stored cameras still give the run's images.
 TEST(StoreView, MovingPointsWithOcclusionFollowEachStep) {
   TempDir tmp;
-  const std::string config = run_config(tmp.path, R"(, "lighting": {"model": "occlusion", "occlusion": {"grid": 24}})");
+  const fs::path dir = tmp.path();
+  const std::string config = run_config(dir, R"(, "lighting": {"model": "occlusion", "occlusion": {"grid": 24}})");
   {
     auto mesh = fixtures::block(fixtures::BlockCells::tets, 6, 5, 4, {0, 0, 0}, {1.2, 1, 0.8});
     insitu::Context ctx(insitu::parse_config(config));
@@ -159,27 +152,27 @@ TEST(StoreView, MovingPointsWithOcclusionFollowEachStep) {
     }
     ctx.finalize();
   }
-  StoreView view((tmp.path / "store").string(), config);
+  StoreView view((dir / "store").string(), config);
   for (int step : {0, 3, 1}) {
     const auto png = view.render(at(step, 90)).png;
     // Coordinates kept within 1/64 of the thinnest altitude: a level or two on silhouettes.
-    EXPECT_LT(render::rms_difference_pct(decoded(png, tmp.path), run_image(tmp.path, step, 90)), 0.5) << "step " << step;
+    EXPECT_LT(render::rms_difference_pct(decoded(png, dir), run_image(dir, step, 90)), 0.5) << "step " << step;
   }
 }
 
 TEST(StoreView, FreeCameraZoomAndTransferFunction) {
   const StoredRun r;
   StoreView view(r.store(), r.config);
-  const auto stored = decoded(view.render(at(2, 0)).png, r.tmp.path);
-  const auto between = decoded(view.render(at(2, 45, 10)).png, r.tmp.path);
+  const auto stored = decoded(view.render(at(2, 0)).png, r.dir());
+  const auto between = decoded(view.render(at(2, 45, 10)).png, r.dir());
   EXPECT_GT(render::rms_difference_pct(stored, between), 1.0);
   ViewRequest closer = at(2, 0);
   closer.zoom = 2;
-  EXPECT_GT(render::rms_difference_pct(stored, decoded(view.render(closer).png, r.tmp.path)), 1.0);
+  EXPECT_GT(render::rms_difference_pct(stored, decoded(view.render(closer).png, r.dir())), 1.0);
   // A transparent transfer function leaves the background (white) everywhere.
   ViewRequest clear = at(2, 0);
   clear.transfer_function = render::TransferFunction{{{0, 1, 0, 0}}, {{0, 0}}};
-  const auto blank = decoded(view.render(clear).png, r.tmp.path);
+  const auto blank = decoded(view.render(clear).png, r.dir());
   for (unsigned char c : blank) ASSERT_EQ(c, 255);
 }
 
@@ -196,15 +189,15 @@ TEST(StoreView, BadRequestsAndStoresAreClearErrors) {
   bad_tf.transfer_function = render::TransferFunction{{{1, 1, 0, 0}, {0, 1, 0, 0}}, {{0, -1}}};
   EXPECT_THROW(view.render(bad_tf), Error);
   EXPECT_NO_THROW(view.render(at(0, 0)));  // still serving after the refusals
-  EXPECT_THROW(StoreView((r.tmp.path / "nowhere").string(), r.config), Error);
-  fs::remove(r.tmp.path / "store" / "config.json");
+  EXPECT_THROW(StoreView((r.dir() / "nowhere").string(), r.config), Error);
+  fs::remove(r.dir() / "store" / "config.json");
   try {
     StoreView kept(r.store(), "");
     ADD_FAILURE() << "a store without config.json was opened without a config";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("--config"), std::string::npos) << e.what();
   }
-  EXPECT_NO_THROW(StoreView((r.tmp.path / "store" / "segment-000").string(), r.config));
+  EXPECT_NO_THROW(StoreView((r.dir() / "store" / "segment-000").string(), r.config));
   std::string other = r.config;
   other.replace(other.find(R"("name": "T")"), 11, R"("name": "P")");
   EXPECT_THROW(StoreView(r.store(), other), Error);
@@ -264,7 +257,7 @@ TEST(RenderRoutes, ParametersAreReadOrRefusedByName) {
 
 TEST(RenderRoutes, TheServerRendersWhatTheLibraryRenders) {
   const StoredRun r;
-  ViewOptions options{r.tmp.path / "db", "127.0.0.1", 0, ""};
+  ViewOptions options{r.dir() / "db", "127.0.0.1", 0, ""};
   options.store = r.store();
   options.config = r.config;
   ViewServer server(options);
@@ -282,8 +275,8 @@ TEST(RenderRoutes, TheServerRendersWhatTheLibraryRenders) {
   EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
   EXPECT_FALSE(png->get_header_value("X-Penumbra-Render-Ms").empty());
   StoreView library(r.store(), r.config);
-  EXPECT_EQ(decoded(std::vector<unsigned char>(png->body.begin(), png->body.end()), r.tmp.path),
-            decoded(library.render(at(4, 90)).png, r.tmp.path));
+  EXPECT_EQ(decoded(std::vector<unsigned char>(png->body.begin(), png->body.end()), r.dir()),
+            decoded(library.render(at(4, 90)).png, r.dir()));
   EXPECT_EQ(c.Get("/api/render?" + token + "&step=99")->status, 400);
   EXPECT_EQ(c.Get("/api/render?" + token + "&phi=abc")->status, 400);
   EXPECT_EQ(c.Get("/api/render?step=0")->status, 403);
@@ -298,14 +291,14 @@ TEST(RenderRoutes, TheServerRendersWhatTheLibraryRenders) {
 TEST(RenderRoutes, FiftyClientsMixingFilesAndRenders) {
   const StoredRun r;
   ViewOptions options;
-  options.database = r.tmp.path / "db";
+  options.database = r.dir() / "db";
   options.store = r.store();
   ViewServer server(options);
   std::thread serving([&] { server.run(); });
   const std::string token = "token=" + server.token();
   std::string image;
-  for (const auto& e : fs::recursive_directory_iterator(r.tmp.path / "db"))
-    if (e.path().extension() == ".png") image = fs::relative(e.path(), r.tmp.path / "db").string();
+  for (const auto& e : fs::recursive_directory_iterator(r.dir() / "db"))
+    if (e.path().extension() == ".png") image = fs::relative(e.path(), r.dir() / "db").string();
   ASSERT_FALSE(image.empty());
   std::atomic<int> wrong{0}, renders{0}, busy{0};
   std::vector<std::vector<double>> latency(50);

@@ -11,16 +11,17 @@
 
 #include "config.h"
 #include "field_stages.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/local_frame.h"
+#include "penumbra/render/camera.h"
 #include "penumbra/render/cpu_ray_caster.h"
 #include "penumbra/render/image.h"
 #include "penumbra/render/light_volume.h"
 #include "penumbra/render/occlusion.h"
 #include "step_stages.h"
 #include "stored_segment.h"
-#include "view_cameras.h"
 
 namespace penumbra::viewer {
 namespace {
@@ -28,7 +29,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // A transfer function as text, to tell whether the lighting was solved for this one.
 std::string key_of(const render::TransferFunction& tf) {
@@ -169,13 +169,10 @@ render::Camera StoreView::Impl::camera(const ViewRequest& r) const {
     throw Error(ErrorCode::invalid_argument, "phi must be finite and theta within [-90, 90]");
   if (!(std::isfinite(r.zoom) && r.zoom >= 0.05 && r.zoom <= 100))
     throw Error(ErrorCode::invalid_argument, "zoom must be within [0.05, 100]");
-  // The run's own orbit camera at (phi, theta), so that a stored angle gives the stored picture;
-  // zoom narrows its field of view around the same eye.
-  insitu::Config one = config;
+  // The run's own orbit camera at (phi, theta), as view_cameras makes it, so that a stored angle
+  // gives the stored picture; zoom narrows its field of view around the same eye.
   const double half = std::atan(std::tan(info.fov_y_deg * M_PI / 360) / r.zoom);
-  one.orbit = insitu::OrbitCameras{{r.phi}, {r.theta}, half * 360 / M_PI};
-  one.look_at.clear();
-  return insitu::view_cameras(one, tets->bounds).front().camera;
+  return render::Camera::orbit(tets->bounds, r.phi, r.theta, half * 360 / M_PI, config.width, config.height);
 }
 
 render::RenderOptions StoreView::Impl::lighting(std::size_t field, const render::TransferFunction& tf,
