@@ -124,21 +124,21 @@ void AsyncRunner::run() {
     if (!m_job) return;
     Job& job = *m_job;  // the solver's thread leaves it alone until it is reset
     lock.unlock();
-    std::optional<Error> failure;
+    std::optional<Failure> failure;
     try {
       for (const FieldCopy& f : job.fields) m_context->publish_field(f.view, false);
       m_context->run_step(job.time, job.cycle, job.decision);
     } catch (const Error& e) {
-      failure = Error(e.code(), e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)");
+      failure = Failure{e.code(), e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)"};
     } catch (const std::bad_alloc&) {
-      failure = Error(ErrorCode::out_of_memory, "out of memory (cycle " + std::to_string(job.cycle) + ", rendered asynchronously)");
+      failure = Failure{ErrorCode::out_of_memory, "out of memory (cycle " + std::to_string(job.cycle) + ", rendered asynchronously)"};
     } catch (const std::exception& e) {
-      failure = Error(ErrorCode::internal_error, e.what());
+      failure = Failure{ErrorCode::internal_error, e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)"};
     }
     m_context->drop_borrowed_fields();
     const StepStats stats = m_context->last_step();
     lock.lock();
-    if (failure) m_failure = failure;  // the latest: the next call reports one, naming its cycle
+    if (failure) m_failure = std::move(failure);  // the latest: the next call reports one, naming its cycle
     m_last_step = stats;
     m_spare = std::move(job.fields);
     m_job.reset();
@@ -158,10 +158,13 @@ bool AsyncRunner::busy() {
 }
 
 std::optional<Error> AsyncRunner::take_failure() {
-  std::optional<Error> failure;
-  std::lock_guard<std::mutex> lock(m_mutex);
-  failure.swap(m_failure);
-  return failure;
+  std::optional<Failure> failure;
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    failure.swap(m_failure);
+  }
+  if (!failure) return std::nullopt;
+  return Error(failure->code, failure->message);
 }
 
 }  // namespace penumbra::insitu

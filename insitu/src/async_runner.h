@@ -54,6 +54,12 @@ private:
     FieldView view;
     std::vector<std::byte> bytes;
   };
+  /// A failure as it crosses threads: a plain string, since std::runtime_error's message is a
+  /// reference-counted string whose count the solver's and the worker's copies would share.
+  struct Failure {
+    ErrorCode code;
+    std::string message;
+  };
   struct Job {
     double time = 0;
     std::int64_t cycle = 0;
@@ -78,7 +84,7 @@ private:
   std::condition_variable m_wake;
   std::optional<Job> m_job;        ///< handed over, not yet completed
   std::vector<FieldCopy> m_spare;  ///< buffers of the last completed job, reused
-  std::optional<Error> m_failure;  ///< the worker's, not yet thrown
+  std::optional<Failure> m_failure;  ///< the worker's, not yet thrown
   StepStats m_last_step;
   bool m_stopping = false;
   std::thread m_worker;
