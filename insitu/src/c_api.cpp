@@ -249,6 +249,15 @@ pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle) {
   });
 }
 
+namespace {
+
+int degradation_bits(const penumbra::insitu::Degradation& d) {
+  return (d.light ? PNB_DEGRADED_LIGHT : 0) | (d.level0_resolution > 0 ? PNB_DEGRADED_LEVEL0 : 0) |
+         (d.image_scale < 1 ? PNB_DEGRADED_IMAGE : 0) | (d.cameras_reduced() ? PNB_DEGRADED_CAMERAS : 0);
+}
+
+}  // namespace
+
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
   if (!ctx) return null_context("pnb_last_step");
   return guarded(ctx, [&] {
@@ -268,6 +277,11 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
     stats.write_ms = s.write_ms;
     stats.other_ms = s.other_ms;
     stats.skipped_steps = ctx->async ? ctx->async->skipped_steps() : 0;
+    stats.budget_ms = s.budget_ms;
+    stats.image_scale = s.degradation.image_scale;
+    stats.degraded = degradation_bits(s.degradation);
+    stats.cameras_rendered = s.degradation.cameras;
+    stats.level0_resolution = s.degradation.level0_resolution;
     penumbra::insitu::write_sized(stats, out, kFirstStepStatsBytes, "pnb_last_step", "pnb_step_stats", "PNB_STEP_STATS_INIT");
   });
 }

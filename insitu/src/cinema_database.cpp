@@ -121,8 +121,9 @@ std::vector<std::vector<std::string>> CinemaDatabase::parse_csv(const std::strin
   return rows;
 }
 
-CinemaDatabase::CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists)
-    : m_directory(std::move(directory)), m_parameters(std::move(parameters)) {
+CinemaDatabase::CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists,
+                               std::size_t annotations)
+    : m_directory(std::move(directory)), m_parameters(std::move(parameters)), m_annotations(annotations) {
   std::error_code ec;
   const fs::path dir(m_directory);
   const bool exists = fs::exists(dir, ec);
@@ -163,9 +164,14 @@ void CinemaDatabase::load_existing(const std::string& csv_path) {
                     joined(expected) + "' (use a new output directory for a different camera or parameter set)");
   for (std::size_t r = 1; r < table.size(); ++r) {
     Row row{std::vector<std::string>(table[r].begin(), table[r].end() - 1), table[r].back()};
-    m_row_of_key[row_key(row.values)] = m_rows.size();
+    m_row_of_key[key_of(row.values)] = m_rows.size();
     m_rows.push_back(std::move(row));
   }
+}
+
+std::string CinemaDatabase::key_of(const std::vector<std::string>& values) const {
+  const std::size_t n = values.size() > m_annotations ? values.size() - m_annotations : 0;
+  return row_key(std::vector<std::string>(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(n)));
 }
 
 std::string CinemaDatabase::new_image_path(const std::string& subdir, const std::string& stem) {
@@ -188,7 +194,7 @@ std::string CinemaDatabase::new_image_path(const std::string& subdir, const std:
 void CinemaDatabase::commit(const std::vector<Row>& rows) {
   for (const auto& row : rows) {
     PNB_ASSERT(row.values.size() == m_parameters.size());
-    const std::string key = row_key(row.values);
+    const std::string key = key_of(row.values);
     auto it = m_row_of_key.find(key);
     if (it != m_row_of_key.end()) {
       m_rows[it->second] = row;

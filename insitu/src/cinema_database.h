@@ -33,8 +33,10 @@ public:
   ///   that does not match `parameters` is refused with Error(invalid_argument). Temporary
   ///   files (`*.tmp.<pid>`) left by a killed writer are removed.
   /// Writes data.csv immediately (header at least), so an unwritable directory fails here with
-  /// Error(io_error) naming the path.
-  CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists);
+  /// Error(io_error) naming the path. The last `annotations` parameters describe an image without
+  /// telling it apart from others (`degraded`): rows are the same image when the others match.
+  CinemaDatabase(std::string directory, std::vector<std::string> parameters, IfExists if_exists,
+                 std::size_t annotations = 0);
 
   /// A new image path relative to the directory, `subdir/stem.png`, or `subdir/stem_2.png`, ...
   /// when taken on disk or earlier in this step: an existing file is never overwritten. Creates
@@ -60,6 +62,8 @@ private:
 
   std::string m_directory;
   std::vector<std::string> m_parameters;
+  std::size_t m_annotations = 0;
+  std::string key_of(const std::vector<std::string>& values) const;
   std::vector<Row> m_rows;
   std::unordered_map<std::string, std::size_t> m_row_of_key;
   std::unordered_set<std::string> m_reserved;

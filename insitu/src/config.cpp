@@ -473,9 +473,24 @@ void parse_async(const json& j, const std::string& path, Config& c) {
     c.async.skip_when_busy = choice(*b, child(path, "backpressure"), {"wait", "skip"}) == "skip";
 }
 
+void parse_budget(const json& j, const std::string& path, Config& c) {
+  only_keys(j, path, {"ms", "share"});
+  BudgetConfig b;
+  if (const json* ms = find(j, "ms")) {
+    b.ms = number(*ms, child(path, "ms"));
+    if (!(b.ms > 0)) fail(child(path, "ms"), "must be > 0");
+  }
+  if (const json* share = find(j, "share")) {
+    b.share = number(*share, child(path, "share"));
+    if (!(b.share > 0)) fail(child(path, "share"), "must be > 0 (a share of the solver's time per step)");
+  }
+  if (b.ms == 0 && b.share == 0) fail(path, "needs ms and/or share");
+  c.budget = b;
+}
+
 Config parse_document(const json& j) {
   only_keys(j, "", {"output", "image", "cameras", "fields", "trigger", "backend", "lighting", "store", "compositing",
-                    "progress", "async"});
+                    "progress", "async", "budget"});
   Config c;
   c.trigger.every_cycles = 1;
   const json* out = find(j, "output");
@@ -505,6 +520,7 @@ Config parse_document(const json& j) {
   if (const json* cm = find(j, "compositing")) parse_compositing(*cm, "compositing", c);
   if (const json* pr = find(j, "progress")) parse_progress(*pr, "progress", c);
   if (const json* as = find(j, "async")) parse_async(*as, "async", c);
+  if (const json* bu = find(j, "budget")) parse_budget(*bu, "budget", c);
   return c;
 }
 

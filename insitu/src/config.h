@@ -14,6 +14,7 @@
 #include "penumbra/render/occlusion.h"
 #include "penumbra/render/shading.h"
 #include "penumbra/render/transfer_function.h"
+#include "step_budget.h"
 #include "trigger_expression.h"
 
 namespace penumbra::insitu {
@@ -140,6 +141,9 @@ struct Config {
   std::size_t runs_memory_bytes = std::size_t{2} << 30;
   ProgressConfig progress;
   AsyncConfig async;
+  /// "budget": a rendering step's most time, and what it gives up to keep to it (step_budget.h);
+  /// the database then gets a `degraded` column.
+  std::optional<BudgetConfig> budget;
   /// The JSON text parse_config read: a store keeps it as config.json, so that views of the run
   /// can be rendered again later with the same fields, transfer functions and lighting.
   std::string text;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // insitu/src/context.cpp -- the run: mesh and fields in, each step through its stages (step_stages.h)
 #include "context.h"
+#include "prepared_mesh.h"
 
 #include <algorithm>
 #include <charconv>
@@ -129,29 +130,6 @@ std::string format_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-struct Context::PreparedMesh {
-  std::shared_ptr<const render::TetMesh> tets;
-  std::unique_ptr<render::Renderer> renderer;  ///< the config's backend, or the CPU where "auto" fell back
-  bool on_gpu = false;                         ///< renderer is the GPU's: lighting is solved there too
-  std::vector<std::byte> connectivity, offsets;  ///< owned copies, caller's index type
-  std::vector<std::uint8_t> cell_types;
-  MeshView view;  ///< over the owned copies (points from the prepared mesh)
-  Bounds global_bounds;  ///< of every rank's mesh: the cameras and the frame are the ranks' common ones
-  std::vector<ViewCamera> cameras;
-  /// Per config field entry, its light volume (model light-volume), made at the first step and
-  /// kept across steps so that each step's light starts from the previous one.
-  std::vector<std::unique_ptr<render::LightVolume>> light_volumes;
-  /// Over several ranks: the points this rank shares with others (made at the first lit step),
-  /// and per field entry its light with the shared points settled (SharedPoints).
-  std::unique_ptr<SharedPoints> shared_points;
-  std::vector<std::vector<float>> settled_light;
-  /// Over several ranks with scattering: its solver over every rank's points, and per field entry
-  /// the scattered light (the next step's start).
-  std::unique_ptr<RankScattering> scattering;
-  std::vector<std::vector<float>> scattered_light;
-  /// Likewise for lighting model "occlusion".
-  std::vector<std::unique_ptr<render::OcclusionLighting>> occlusions;
-};
 
 Context::Context(Config config, std::shared_ptr<RankGroup> group)
     : m_config(std::move(config)), m_group(std::move(group)), m_trigger(m_config.trigger),
@@ -443,10 +421,14 @@ render::LightVolume& Context::light_volume_of(std::size_t index) {
   auto& volumes = m_mesh->light_volumes;
   if (volumes.size() < m_config.fields.size()) volumes.resize(m_config.fields.size());
   auto& lv = volumes[index];
+  // A plan that coarsens level 0, or brings it back, makes the volume again at that resolution.
+  const int level0_wanted = m_plan && m_plan->degradation.level0_resolution > 0 ? m_plan->degradation.level0_resolution
+                                                                                : m_config.lighting->level0_resolution;
+  if (lv && lv->options().level0_resolution != level0_wanted) lv.reset();
   if (!lv) {
     const LightingConfig& l = *m_config.lighting;
     render::LightVolumeOptions lo;
-    lo.level0_resolution = l.level0_resolution;
+    lo.level0_resolution = level0_wanted;
     lo.sigma_a = l.absorption;
     lo.sigma_s = l.scattering;
     // With the gpu backend the light is solved on the same device as the rendering.
@@ -517,7 +499,8 @@ const std::vector<float>& Context::solve_light_volume(std::size_t index, const S
     lv->set_field(step.normalized, tf);
   });
   if (m_group->size() > 1) lv->combine_level0(level0_merge(*m_group));
-  agreed("pnb_execute", [&] { m_last_step.light = lv->update(m_config.lighting->budget); });
+  agreed("pnb_execute", [&] { m_last_step.light = lv->update(light_budget()); });
+  note_light_update(index);
   return m_group->size() > 1 ? settle_shared_points(index, *lv) : lv->light_rgb();
 }
 
@@ -558,8 +541,8 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
                                                 render::RenderOptions options, double& render_ms) {
   const bool occlusion = lit(m_config) && m_config.lighting->occlusion_model;
   std::vector<RenderedView> views;
-  for (std::size_t c = 0; c < m_mesh->cameras.size(); ++c) {
-    const render::Camera& camera = m_mesh->cameras[c].camera;
+  for (const std::size_t c : m_cameras_now) {
+    const render::Camera camera = step_camera(c);
     // Occlusion looks towards the viewer: one light field per camera (or, in image space, a
     // light evaluated along every ray).
     if (occlusion) {
@@ -580,6 +563,8 @@ std::vector<RenderedView> Context::render_views(std::size_t index, const StepFie
     options.ray_runs_memory_bytes = m_config.runs_memory_bytes;
     m_mesh->renderer->render(step.normalized, tf, camera, options, view.output);
     render_ms += ms_since(t0);
+    ++m_last_step.views;
+    m_last_step.rendered_pixels += static_cast<double>(camera.width) * camera.height;
   }
   return views;
 }
@@ -596,6 +581,13 @@ ImageLabels Context::labels_of(const ComposedImage& image, double time, std::int
   l.field = m_field_labels[image.field];
   if (m_config.lighting) l.lighting = lighting_label(*m_config.lighting);
   l.stem = cycle_text + cam.stem;
+  if (m_plan) {
+    Degradation d = m_plan->degradation;
+    d.light = m_light_short.size() > image.field && m_light_short[image.field];
+    l.degraded = d.text();
+  } else if (m_config.budget) {
+    l.degraded = "none";
+  }
   return l;
 }
 
@@ -613,7 +605,8 @@ void Context::render_field(std::size_t index, double time, std::int64_t cycle, S
   agreed("pnb_execute", [&] { views = render_views(index, *step, tf, options, render_ms); });
   for (RenderedView& view : views) {
     const auto t_composite = Clock::now();
-    const std::optional<ComposedImage> image = composite(std::move(view));
+    std::optional<ComposedImage> image = composite(std::move(view));
+    if (image && m_plan && m_plan->degradation.image_scale < 1) image = enlarged(*image, m_config.width, m_config.height);
     const auto t_write = Clock::now();
     m_last_step.composite_ms += std::chrono::duration<double, std::milli>(t_write - t_composite).count();
     if (image && m_writer) rows.push_back(m_writer->write(*image, labels_of(*image, time, cycle)));
@@ -665,8 +658,9 @@ bool Context::execute(double time, std::int64_t cycle) {
 }
 
 void Context::account_execute(double inside_ms) {
-  if (m_config.trigger.max_share <= 0) return;
   const auto now = Clock::now();
+  m_last_return = now;
+  if (m_config.trigger.max_share <= 0) return;
   // The clock starts as the first step returns: from then on the solver's own time is seen too.
   if (!m_first_execute) {
     m_first_execute = now;
@@ -691,8 +685,14 @@ StepDecision Context::decide_step(double time, std::int64_t cycle, const std::ma
     if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
     require(std::isfinite(time), "pnb_execute: time must be finite");
   });
+  if (m_last_return) {
+    // The solver's own time since the last step returned: what a share budget is a share of.
+    m_solver_step_ms.push_back(ms_since(*m_last_return));
+    if (m_solver_step_ms.size() > 5) m_solver_step_ms.erase(m_solver_step_ms.begin());
+  }
   StepDecision d;
   d.renders = trigger_fires(time, cycle);
+  d.budget_ms = budget_for_step(d.renders);
   StepFailures failures;
   observe_trigger_statistics(cycle, fields, failures);
   d.failure = failures.text;
@@ -718,8 +718,12 @@ bool Context::run_step(double time, std::int64_t cycle, const StepDecision& deci
   std::vector<CinemaDatabase::Row> rows;
   double render_ms = 0;
   const std::uint64_t bytes_before = m_writer ? m_writer->bytes_written() : 0;
+  m_plan = plan_this_step(decision.budget_ms);
+  m_cameras_now = step_cameras();
+  m_light_short.assign(m_config.fields.size(), false);
   m_last_step = {};
   m_last_step.store_ms = store_ms;
+  m_last_step.budget_ms = decision.budget_ms;
   for (std::size_t i = 0; i < m_config.fields.size(); ++i) {
     try {
       render_field(i, time, cycle, values, rows, render_ms);
@@ -744,6 +748,7 @@ bool Context::run_step(double time, std::int64_t cycle, const StepDecision& deci
   s.render_ms = render_ms;
   s.total_ms = ms_since(t0);
   s.other_ms = std::max(0.0, s.total_ms - (s.store_ms + s.gather_ms + s.light_ms + s.render_ms + s.composite_ms + s.write_ms));
+  s.degradation = step_degradation();
   log_progress(time, bytes_before, failures);
   report(failures);
   return true;

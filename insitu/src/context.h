@@ -42,12 +42,22 @@ struct StepStats {
   /// The other stages of total_ms: the store's record of the step, the fields gathered and
   /// normalised, the views composited, the PNGs and data.csv written; other_ms is the rest.
   double store_ms = 0, gather_ms = 0, composite_ms = 0, write_ms = 0, other_ms = 0;
+  /// "budget": this step's (0: none), and what the step gave up for it.
+  double budget_ms = 0;
+  Degradation degradation;
+  /// What the next step's plan measures by: views rendered and their pixels, the largest light
+  /// piece (one light's level-0 solve) and whether every field's light converged.
+  int views = 0;
+  double rendered_pixels = 0;
+  double light_piece_ms = 0;
+  bool light_converged = true;
 };
 
 /// The first half of a step, decided where the solver calls (Context::decide_step): whether it
 /// renders, and the failure of taking the trigger's statistics (reported with the step).
 struct StepDecision {
   bool renders = false;
+  double budget_ms = 0;  ///< "budget": the step's time, the same on every rank; 0 = none
   std::string failure;
   ErrorCode code = ErrorCode::ok;
 };
@@ -200,6 +210,22 @@ private:
   /// steps' decisions (collective: reduced over the ranks). A field not published is a failure.
   void observe_trigger_statistics(std::int64_t cycle, const std::map<std::string, FieldView>& fields,
                                   StepFailures& failures);
+  /// "budget": the step's time (the least over ranks: collective when the step renders with a
+  /// share budget), from the solver's recent time per step.
+  double budget_for_step(bool renders);
+  /// "budget": what this rendering step gives up (nothing on the first, which measures), planned
+  /// from the last rendering step's costs, the largest over ranks (collective).
+  std::optional<StepPlan> plan_this_step(double budget_ms);
+  /// The cameras this step renders: all of them, or with a plan that leaves some out, the next
+  /// ones in turn.
+  std::vector<std::size_t> step_cameras();
+  /// The lighting budget of a field's light volume this step: lighting.budget within the plan's.
+  render::LightBudget light_budget() const;
+  /// After field `index`'s light update: its largest piece and whether it converged (over ranks,
+  /// whether it did on every rank), and whether it fell short of the plan's allowance.
+  void note_light_update(std::size_t index);
+  /// The plan's degradation with the light's part as it turned out.
+  Degradation step_degradation() const;
   /// The step's failures: thrown, on every rank when any rank had one.
   void report(const StepFailures& failures);
   /// The composite stage: a view's image over the background; with several ranks their runs
@@ -236,6 +262,8 @@ private:
   /// Render stage: the field from every camera.
   std::vector<RenderedView> render_views(std::size_t index, const StepField& step, const render::TransferFunction& tf,
                                          render::RenderOptions options, double& render_ms);
+  /// A view's camera as this step renders it: smaller by the plan's image scale.
+  render::Camera step_camera(std::size_t camera) const;
   /// The database values of a composed image of this step.
   ImageLabels labels_of(const ComposedImage& image, double time, std::int64_t cycle) const;
   /// One field through the stages after gathering: prepare, render, composite, write.
@@ -256,6 +284,14 @@ private:
   StepStats m_last_step;
   std::optional<std::chrono::steady_clock::time_point> m_first_execute;  ///< the adaptive cadence's start
   double m_inside_ms = 0, m_share = 0;
+  /// "budget": when pnb_execute last returned, the solver's last times per step since, this
+  /// step's plan, the next camera in turn and, per field, whether its light fell short of it.
+  std::optional<std::chrono::steady_clock::time_point> m_last_return;
+  std::vector<double> m_solver_step_ms;
+  std::optional<StepPlan> m_plan;
+  std::size_t m_next_camera = 0;
+  std::vector<std::size_t> m_cameras_now;
+  std::vector<bool> m_light_short;
   std::size_t m_preparations = 0;
   std::size_t m_geometry_updates = 0;
   bool m_finalized = false;

@@ -15,6 +15,7 @@ std::vector<std::string> database_parameters(const Config& c) {
   if (!c.look_at.empty()) p.push_back("camera");
   p.push_back("field");
   if (c.lighting) p.push_back("lighting");
+  if (c.budget) p.push_back("degraded");
   return p;
 }
 
@@ -23,7 +24,9 @@ std::vector<std::string> database_parameters(const Config& c) {
 ImageWriter::ImageWriter(const Config& config)
     : m_camera_column(!config.look_at.empty()),
       m_lighting_column(config.lighting.has_value()),
-      m_database(std::make_unique<CinemaDatabase>(config.output_directory, database_parameters(config), config.if_exists)) {}
+      m_degraded_column(config.budget.has_value()),
+      m_database(std::make_unique<CinemaDatabase>(config.output_directory, database_parameters(config), config.if_exists,
+                                                  config.budget ? 1 : 0)) {}
 
 CinemaDatabase::Row ImageWriter::write(const ComposedImage& image, const ImageLabels& labels) {
   const std::string rel = m_database->new_image_path(labels.field, labels.stem);
@@ -37,6 +40,7 @@ CinemaDatabase::Row ImageWriter::write(const ComposedImage& image, const ImageLa
   if (m_camera_column) row.values.push_back(labels.camera);
   row.values.push_back(labels.field);
   if (m_lighting_column) row.values.push_back(labels.lighting);
+  if (m_degraded_column) row.values.push_back(labels.degraded);
   row.file = rel;
   return row;
 }

@@ -19,6 +19,7 @@ struct ImageLabels {
   std::string camera;    ///< the `camera` column (configs with look_at cameras)
   std::string field;     ///< the `field` column, also the image's folder
   std::string lighting;  ///< the `lighting` column (configs with lighting)
+  std::string degraded;  ///< the `degraded` column (configs with a budget)
   std::string stem;      ///< the image file name without its extension
 };
 
@@ -36,7 +37,7 @@ public:
   std::uint64_t bytes_written() const { return m_bytes; }
 
 private:
-  bool m_camera_column, m_lighting_column;
+  bool m_camera_column, m_lighting_column, m_degraded_column;
   std::uint64_t m_bytes = 0;
   std::unique_ptr<CinemaDatabase> m_database;
 };

@@ -45,6 +45,8 @@ std::string ProgressLog::json_line(const StepReport& step) {
              {"light", ms(s.light_ms)},         {"render", ms(s.render_ms)}, {"composite", ms(s.composite_ms)},
              {"write", ms(s.write_ms)},         {"other", ms(s.other_ms)}};
   if (s.light_ms > 0) j["light"] = {{"converged", s.light.converged}, {"residual", s.light.residual}};
+  if (s.budget_ms > 0) j["budget_ms"] = ms(s.budget_ms);
+  j["degraded"] = s.degradation.text();
   j["bytes_written"] = step.bytes_written;
   j["failure"] = step.failure.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(step.failure);
   return j.dump();
@@ -54,8 +56,9 @@ void ProgressLog::step(const StepReport& step) {
   ++m_steps;
   const StepStats& s = *step.stats;
   if (m_config.stderr_every > 0 && m_steps % m_config.stderr_every == 0)
-    std::fprintf(stderr, "penumbra: cycle %lld, time %g: %d image(s) in %.0f ms (render %.0f, light %.0f, write %.0f)%s\n",
+    std::fprintf(stderr, "penumbra: cycle %lld, time %g: %d image(s) in %.0f ms (render %.0f, light %.0f, write %.0f)%s%s\n",
                  static_cast<long long>(s.cycle), step.time, s.images, s.total_ms, s.render_ms, s.light_ms, s.write_ms,
+                 s.degradation.any() ? ("; degraded " + s.degradation.text()).c_str() : "",
                  step.failure.empty() ? "" : "; failed");
   if (m_fd < 0) return;
   const std::string line = json_line(step) + "\n";

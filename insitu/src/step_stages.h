@@ -35,4 +35,8 @@ struct ComposedImage {
 /// background colour.
 ComposedImage composite_view(RenderedView&& view, const float background[3]);
 
+/// `image` enlarged to width x height by bilinear interpolation between pixel centres: a view
+/// rendered smaller to keep within a step's budget, written at the database's one image size.
+ComposedImage enlarged(const ComposedImage& image, int width, int height);
+
 }  // namespace penumbra::insitu

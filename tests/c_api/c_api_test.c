@@ -303,6 +303,37 @@ static void test_step_needs(const char* tmp) {
   pnb_destroy(ctx);
 }
 
+/* "budget": a step that cannot keep to its budget says what it gave up. */
+static void test_budget(const char* tmp) {
+  char config[1024];
+  pnb_context ctx = NULL;
+  pnb_mesh_desc mesh = good_mesh();
+  pnb_field_desc field = good_field("T");
+  pnb_step_stats stats = PNB_STEP_STATS_INIT;
+  int cycle;
+  snprintf(config, sizeof config,
+           "{\"output\": {\"directory\": \"%s/budget-db\"}, \"image\": {\"width\": 16, \"height\": 16},"
+           " \"cameras\": {\"phi\": [0, 90], \"theta\": [30]}, \"fields\": [{\"name\": \"T\"}],"
+           " \"budget\": {\"ms\": 0.0001}}", tmp);
+  expect(pnb_create(config, &ctx), PNB_OK, NULL, NULL, "create with a budget");
+  if (!ctx) return;
+  expect(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), PNB_OK, ctx, NULL, "publish mesh, budget");
+  pnb_publish_field(ctx, &field, PNB_BORROW);
+  expect(pnb_execute(ctx, 0, 0), PNB_OK, ctx, NULL, "execute, budget, first step");
+  expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step, budget, first step");
+  check(stats.degraded == 0 && stats.cameras_rendered == 2 && stats.image_scale == 1,
+        "budget: the first step measures, giving up nothing", NULL);
+  for (cycle = 1; cycle < 3; ++cycle) {
+    pnb_publish_field(ctx, &field, PNB_BORROW);
+    expect(pnb_execute(ctx, cycle, cycle), PNB_OK, ctx, NULL, "execute, budget");
+  }
+  expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step, budget");
+  check(stats.budget_ms == 0.0001 && stats.degraded == (PNB_DEGRADED_IMAGE | PNB_DEGRADED_CAMERAS) &&
+            stats.image_scale == 0.25 && stats.cameras_rendered == 1 && stats.level0_resolution == 0 && stats.images == 1,
+        "budget: an unlit step gives up image size, then cameras", NULL);
+  pnb_destroy(ctx);
+}
+
 /* "async": the steps handed to a worker; pnb_finalize drains it and every step is in the database. */
 static void test_async(const char* tmp) {
   char config[1024], csv[700];
@@ -351,6 +382,7 @@ int main(void) {
   test_null_context();
   test_step_needs(tmp);
   test_async(tmp);
+  test_budget(tmp);
 
   snprintf(config, sizeof config,
            "{\"output\": {\"directory\": \"%s/db\"}, \"image\": {\"width\": 16, \"height\": 16},"

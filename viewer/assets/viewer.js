@@ -50,6 +50,9 @@ function readDatabase(text) {
 }
 
 const isNumber = (s) => s !== "" && !isNaN(Number(s));
+// Columns that describe an image without choosing it: a run with a "budget" says in `degraded`
+// what a step gave up. They get no control and play no part in choosing a row.
+const isAnnotation = (name) => name === "degraded";
 function sortedValues(rows, c) {
   const values = [...new Set(rows.map((r) => r[c]))];
   return values.every(isNumber) ? values.sort((a, b) => Number(a) - Number(b)) : values.sort();
@@ -67,7 +70,7 @@ function rowFor(state, changed) {
   let best = null, bestScore = -1;
   for (const row of view.rows) {
     let score = 0;
-    view.columns.forEach((name, c) => { if (row[c] === state[name]) score += name === changed ? 1000 : 1; });
+    view.columns.forEach((name, c) => { if (!isAnnotation(name) && row[c] === state[name]) score += name === changed ? 1000 : 1; });
     if (score > bestScore) { best = row; bestScore = score; }
   }
   return best;
@@ -96,11 +99,20 @@ function show(changed) {
   writeHash();
   const url = imageUrl(row);
   const next = new Image();
-  next.onload = () => { document.getElementById("image").src = url; showMessage(""); };
+  next.onload = () => { document.getElementById("image").src = url; showMessage(""); showAnnotations(row); };
   next.onerror = () => showMessage("Image '" + row[row.length - 1] + "' is listed in data.csv but cannot be loaded.");
   next.src = url;
   highlightRow(row);
-  for (const name of view.columns) for (const d of [-1, 1]) preload(rowFor(stepped(name, d), name));
+  for (const name of view.columns) if (!isAnnotation(name)) for (const d of [-1, 1]) preload(rowFor(stepped(name, d), name));
+}
+
+// What the shown image gave up to keep to its step's budget, when it gave up anything.
+function showAnnotations(row) {
+  const notes = [];
+  view.columns.forEach((name, c) => { if (isAnnotation(name) && row[c] !== "none") notes.push(name + ": " + row[c]); });
+  const el = document.getElementById("annotation");
+  el.hidden = notes.length === 0;
+  el.textContent = notes.join("; ");
 }
 
 // The state with column `name` moved `delta` values along its sorted values (wrapping for phi).
@@ -121,6 +133,7 @@ function buildControls() {
   const form = document.getElementById("controls");
   form.replaceChildren();
   for (const name of view.columns) {
+    if (isAnnotation(name)) continue;
     const values = view.values[name];
     const label = document.createElement("label");
     label.textContent = name + (values.length > 1 ? " (" + values.length + ")" : "");
@@ -207,7 +220,7 @@ function highlightRow(row) {
 // The state in the URL's fragment (the token stays in the query, never in a shared link's state).
 function writeHash() {
   const p = new URLSearchParams();
-  for (const name of view.columns) p.set(name, view.state[name]);
+  for (const name of view.columns) if (!isAnnotation(name)) p.set(name, view.state[name]);
   history.replaceState(null, "", "#" + p.toString());
 }
 function readHash() {

@@ -172,8 +172,23 @@ typedef struct {
   /* ABI 5: with "async" and "backpressure": "skip", the steps skipped so far because the worker
    * was still busy (never in the database or the store). */
   int64_t skipped_steps;
+  /* ABI 5: with "budget", the step's budget (0: none) and what the step gave up to keep to it:
+   * degraded holds the PNB_DEGRADED_* bits taken, image_scale the fraction of the configured width
+   * and height the images were rendered at (then enlarged to it), cameras_rendered how many of
+   * the configured cameras rendered, level0_resolution the light volume's coarsened level 0
+   * (0: as configured). */
+  double budget_ms;
+  double image_scale;
+  int degraded;
+  int cameras_rendered;
+  int level0_resolution;
 } pnb_step_stats;
-#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+/* pnb_step_stats.degraded, in the order a step over its budget gives them up. */
+#define PNB_DEGRADED_LIGHT 1   /* the light volume stopped short: it converges over the next steps */
+#define PNB_DEGRADED_LEVEL0 2  /* the light volume's level 0 coarsened */
+#define PNB_DEGRADED_IMAGE 4   /* images rendered smaller, then enlarged */
+#define PNB_DEGRADED_CAMERAS 8 /* some cameras left for the next steps */
 /* Fills the members of *out that its struct_size holds; PNB_INVALID_ARGUMENT for a NULL out or
  * a struct_size that is not of any version's struct. */
 pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out);
