@@ -11,7 +11,11 @@
 namespace penumbra::insitu {
 
 AsyncRunner::AsyncRunner(std::unique_ptr<Context> context, bool skip_when_busy)
-    : m_context(std::move(context)), m_skip_when_busy(skip_when_busy), m_worker([this] { run(); }) {}
+    : m_context(std::move(context)), m_skip_when_busy(skip_when_busy) {
+  // Over ranks the solver's thread decides through a group of its own while the worker renders.
+  if (m_context->ranks().size() > 1) m_context->decide_on_own_group();
+  m_worker = std::thread([this] { run(); });
+}
 
 AsyncRunner::~AsyncRunner() {
   {
@@ -66,7 +70,8 @@ bool AsyncRunner::execute(double time, std::int64_t cycle) {
   const bool work = decision.renders || needs.stores;
   bool handed_over = false;
   std::optional<Error> earlier;  // an earlier step's failure: this step's own is the next call's
-  if (work && busy() && m_skip_when_busy) {
+  // Over ranks every rank skips when any rank's worker is busy, so that all render the same steps.
+  if (work && m_skip_when_busy && m_context->on_any_rank(busy())) {
     ++m_skipped;
   } else if (work) {
     handed_over = true;

@@ -24,7 +24,10 @@ namespace penumbra::insitu {
 /// and counted (the database and the store never see it). A worker's failure is thrown by the
 /// next execute() (after that step is handed over) or by finalize(). The mesh is published with
 /// the worker idle. Every method is called from one thread (the solver's); the Context is used
-/// by the worker only between a hand-over and its completion.
+/// by the worker only between a hand-over and its completion. Over MPI ranks (which needs
+/// MPI_THREAD_MULTIPLE) the solver's thread decides steps through a duplicate of the context's
+/// communicator while the worker composites through the context's own, and a busy worker on any
+/// rank makes every rank skip or wait alike.
 class AsyncRunner {
 public:
   AsyncRunner(std::unique_ptr<Context> context, bool skip_when_busy);

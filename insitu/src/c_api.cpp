@@ -2,7 +2,9 @@
 // insitu/src/c_api.cpp -- the C API: argument checks, conversion to views, and the guard that
 // keeps every exception out of the host program
 #include <cstddef>
+#include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <new>
 #include <string>
 #include <vector>
@@ -176,6 +178,27 @@ penumbra::FieldView field_view(const pnb_field_desc& d) {
 
 namespace penumbra::insitu {
 
+namespace {
+
+/// Whether "async" can run over `group`: its worker talks to the other ranks from a thread of its
+/// own, which MPI allows at MPI_THREAD_MULTIPLE. Below it every step runs inside pnb_execute,
+/// where the solver's thread does the communication, and rank 0 says so once per process.
+bool may_run_async(const RankGroup& group) {
+  const std::string refused = group.threads_refused();
+  if (refused.empty()) return true;
+  static std::once_flag said;
+  if (group.rank() == 0)
+    std::call_once(said, [&refused] {
+      std::fprintf(stderr,
+                   "penumbra: \"async\" over MPI ranks needs MPI_THREAD_MULTIPLE, and MPI was initialised with %s: "
+                   "every step runs inside pnb_execute instead\n",
+                   refused.c_str());
+    });
+  return false;
+}
+
+}  // namespace
+
 pnb_status create_context(const char* call, const char* config, std::shared_ptr<RankGroup> group, pnb_context* out) {
   if (out) *out = nullptr;
   std::unique_ptr<pnb_context_s> ctx;
@@ -186,16 +209,19 @@ pnb_status create_context(const char* call, const char* config, std::shared_ptr<
     require(config != nullptr, std::string(call) + ": config is NULL (expected a file path or JSON text)");
     ctx = std::make_unique<pnb_context_s>();
     ctx->context = std::make_unique<Context>(parse_config(config), group);
-    if (ctx->context->config().async.enabled) {
-      const bool skip = ctx->context->config().async.skip_when_busy;
-      ctx->async = std::make_unique<AsyncRunner>(std::move(ctx->context), skip);
-    }
   });
   if (group->size() > 1) {
     const auto failed = group->failures(status == PNB_OK ? 0 : static_cast<int>(status), t_last_error);
     if (!failed.empty()) return record(nullptr, static_cast<pnb_status>(failed.front().code), ranks_text(failed, group->size()).c_str());
   }
-  if (status == PNB_OK) *out = ctx.release();
+  if (status != PNB_OK) return status;
+  // Once every rank has its context: over ranks the runner's making is collective.
+  const AsyncConfig& async = ctx->context->config().async;
+  if (async.enabled && may_run_async(*group)) {
+    const pnb_status started = guarded(nullptr, [&] { ctx->async = std::make_unique<AsyncRunner>(std::move(ctx->context), async.skip_when_busy); });
+    if (started != PNB_OK) return started;
+  }
+  *out = ctx.release();
   return status;
 }
 

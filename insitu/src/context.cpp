@@ -105,8 +105,6 @@ void check_rank_rules(const Config& c) {
   if (c.lighting && c.lighting->occlusion_model && c.lighting->occlusion.space == OcclusionSpace::image &&
       c.lighting->occlusion.shadows && !c.lighting->lights.empty())
     refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
-  // Its worker would talk to the other ranks from a thread of its own.
-  if (c.async.enabled) refuse("\"async\"");
 }
 
 }  // namespace
@@ -132,7 +130,7 @@ std::string format_number(double v) {
 
 
 Context::Context(Config config, std::shared_ptr<RankGroup> group)
-    : m_config(std::move(config)), m_group(std::move(group)), m_trigger(m_config.trigger),
+    : m_config(std::move(config)), m_group(std::move(group)), m_decisions(m_group), m_trigger(m_config.trigger),
       m_field_labels(field_labels(m_config)) {
   // From here on config().backend names the renderer that runs: cpu or gpu.
   m_cpu_fallback = m_config.backend == Backend::automatic;
@@ -629,8 +627,8 @@ bool Context::trigger_fires(double time, std::int64_t cycle) {
   const bool fires = m_trigger.fires(time, cycle);
   // min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not.
   double v[2] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0};
-  m_group->minimum(v, 2);
-  if (m_group->size() > 1 && v[0] == 0 && v[1] == 0)
+  m_decisions->minimum(v, 2);
+  if (m_decisions->size() > 1 && v[0] == 0 && v[1] == 0)
     throw Error(ErrorCode::invalid_operation, "pnb_execute: the ranks disagree whether cycle " + std::to_string(cycle) +
                                                   " renders: every rank must pass the same time and cycle");
   return fires;
@@ -670,9 +668,9 @@ void Context::account_execute(double inside_ms) {
   const double wall = std::chrono::duration<double, std::milli>(now - *m_first_execute).count();
   double share = wall > 0 ? m_inside_ms / wall : 0;
   // The largest share over the ranks, so that every rank leaves out the same steps.
-  if (m_group->size() > 1) {
+  if (m_decisions->size() > 1) {
     double negative = -share;
-    m_group->minimum(&negative, 1);
+    m_decisions->minimum(&negative, 1);
     share = -negative;
   }
   m_share = share;
@@ -681,7 +679,7 @@ void Context::account_execute(double inside_ms) {
 
 StepDecision Context::decide_step(double time, std::int64_t cycle, const std::map<std::string, FieldView>& fields) {
   require_open("pnb_execute");
-  agreed("pnb_execute", [&] {
+  agreed_on(*m_decisions, "pnb_execute", [&] {
     if (!m_mesh) throw Error(ErrorCode::invalid_operation, "pnb_execute: no mesh published; call pnb_publish_mesh first");
     require(std::isfinite(time), "pnb_execute: time must be finite");
   });
@@ -798,10 +796,10 @@ void Context::observe_trigger_statistics(std::int64_t cycle, const std::map<std:
   // Every rank takes part in the reductions; a rank that lacks a field makes every rank skip
   // this step's statistics, so that all keep the same ones.
   double ok = published ? 1 : 0;
-  m_group->minimum(&ok, 1);
+  m_decisions->minimum(&ok, 1);
   if (ok == 0) return;
-  m_group->minimum(extremes.data(), static_cast<int>(extremes.size()));
-  const std::vector<double> all = m_group->all_gather(sums);
+  m_decisions->minimum(extremes.data(), static_cast<int>(extremes.size()));
+  const std::vector<double> all = m_decisions->all_gather(sums);
   StatsByField stats;
   for (std::size_t i = 0; i < names.size(); ++i) {
     double sum = 0, count = 0;
@@ -810,6 +808,12 @@ void Context::observe_trigger_statistics(std::int64_t cycle, const std::map<std:
     stats[names[i]] = {extremes[2 * i], -extremes[2 * i + 1], sum / count};
   }
   m_trigger.observe(std::move(stats));
+}
+
+bool Context::on_any_rank(bool mine) {
+  double none = mine ? 0 : 1;
+  m_decisions->minimum(&none, 1);
+  return none == 0;
 }
 
 StepNeeds Context::step_needs(double time, std::int64_t cycle) const {

@@ -124,6 +124,16 @@ public:
   /// The last share account_execute found (0 without max_share).
   double execute_share() const { return m_share; }
 
+  /// Over several ranks, decide_step and account_execute talk through a group of their own from
+  /// here on (collective), so that they may run on the solver's thread while run_step talks
+  /// through the context's group on a worker's.
+  void decide_on_own_group() { m_decisions = m_group->duplicate(); }
+  /// Whether `mine` holds on any rank, through the decisions' group (collective): an
+  /// asynchronous run skips a step on every rank when any rank's worker is still busy.
+  bool on_any_rank(bool mine);
+  /// The ranks' group (serial: one rank).
+  const RankGroup& ranks() const { return *m_group; }
+
   /// publish_field's checks alone, storing nothing: false for a field the config does not use,
   /// Error for one it refuses.
   bool check_field(const FieldView& field) const;
@@ -178,7 +188,12 @@ private:
   /// when any rank's phase threw, every rank throws one Error naming each failing rank and its
   /// message. A serial run rethrows its own exception as it is.
   template <class Phase>
-  void agreed(const char* call, Phase&& phase);
+  void agreed(const char* call, Phase&& phase) {
+    agreed_on(*m_group, call, std::forward<Phase>(phase));
+  }
+  /// The same over `group`: the decisions' group for what decide_step runs.
+  template <class Phase>
+  void agreed_on(RankGroup& group, const char* call, Phase&& phase);
   /// This rank's part of a publish: what changed, and the tet mesh for it in its own frame.
   struct MeshUpdate {
     enum class Kind { same, moved, fresh } kind = Kind::same;
@@ -273,6 +288,7 @@ private:
 
   Config m_config;
   std::shared_ptr<RankGroup> m_group;
+  std::shared_ptr<RankGroup> m_decisions;  ///< decide_step's: m_group, or its duplicate (decide_on_own_group)
   Trigger m_trigger;
   std::unique_ptr<ImageWriter> m_writer;  ///< the write stage; opened with the context, on rank 0 only
   std::unique_ptr<FieldStore> m_store;  ///< null without a "store" config
@@ -305,7 +321,7 @@ std::string format_number(double v);
 std::string ranks_text(const std::vector<RankGroup::Failure>& failed, int ranks);
 
 template <class Phase>
-void Context::agreed(const char* call, Phase&& phase) {
+void Context::agreed_on(RankGroup& group, const char* call, Phase&& phase) {
   int code = 0;
   std::string message;
   std::exception_ptr mine;
@@ -320,13 +336,13 @@ void Context::agreed(const char* call, Phase&& phase) {
     message = std::string(call) + ": " + e.what();
     mine = std::current_exception();
   }
-  if (m_group->size() == 1) {
+  if (group.size() == 1) {
     if (mine) std::rethrow_exception(mine);
     return;
   }
-  const auto failed = m_group->failures(code, message);
+  const auto failed = group.failures(code, message);
   if (failed.empty()) return;
-  throw Error(static_cast<ErrorCode>(code != 0 ? code : failed.front().code), ranks_text(failed, m_group->size()));
+  throw Error(static_cast<ErrorCode>(code != 0 ? code : failed.front().code), ranks_text(failed, group.size()));
 }
 
 }  // namespace penumbra::insitu

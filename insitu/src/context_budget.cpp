@@ -41,7 +41,7 @@ double Context::budget_for_step(bool renders) {
   const BudgetConfig& b = *m_config.budget;
   double ms = b.ms > 0 ? b.ms : std::numeric_limits<double>::infinity();
   if (b.share > 0 && !m_solver_step_ms.empty()) ms = std::min(ms, b.share * median(m_solver_step_ms));
-  m_group->minimum(&ms, 1);
+  m_decisions->minimum(&ms, 1);
   // A share alone, before the solver's time per step is known: the step measures, unbounded.
   return std::isfinite(ms) ? ms : 0;
 }

@@ -24,6 +24,8 @@ public:
     // A serial run composites whole views itself (composite_view); runs are never asked for.
     return render::Image(width, height);
   }
+  std::shared_ptr<RankGroup> duplicate() override { return std::make_shared<SerialGroup>(); }
+  std::string threads_refused() const override { return {}; }
 };
 
 }  // namespace

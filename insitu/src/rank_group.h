@@ -42,6 +42,13 @@ public:
   /// The ranks' runs of one view merged: every pixel's runs in depth order, composited front to
   /// back ("over"). Returns the whole image on rank 0 and an empty one elsewhere.
   virtual render::Image composite(const render::RayRuns& runs, int width, int height) = 0;
+  /// Another group over the same ranks whose messages never meet this one's, so that two threads
+  /// may each talk through one (an asynchronous run decides steps on the solver's thread while
+  /// its worker renders them). Collective.
+  virtual std::shared_ptr<RankGroup> duplicate() = 0;
+  /// Empty when two threads may communicate at once (a serial group; MPI_THREAD_MULTIPLE), else
+  /// the thread support the solver initialised MPI with ("MPI_THREAD_FUNNELED").
+  virtual std::string threads_refused() const = 0;
 };
 
 /// The one rank of a process that renders alone.

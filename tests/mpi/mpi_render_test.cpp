@@ -3,6 +3,7 @@
 // partition of a non-convex mesh, against the same mesh rendered whole in one process.
 //
 // Usage (under mpirun): penumbra_mpi_render_test OUT_DIR PARTITION LIGHTING BACKEND [fail=RANK] [ghosts]
+//                                                [async] [threads=multiple]
 //   PARTITION  slabs (cells by centroid x) | metis (METIS_PartMeshDual: non-convex parts, as a
 //              solver's partitioner cuts them) | round-robin (cell c on rank c mod ranks: every ray
 //              enters every rank many times, the worst case)
@@ -16,16 +17,25 @@
 //              that share a point with its own, and a cell field C is rendered too: averaged at the
 //              points over the ghosts as well, it matches the one-process average at partition
 //              boundaries, and no ghost is drawn twice.
+//   async      the config asks for "async": with threads=multiple (MPI_Init_thread at
+//              MPI_THREAD_MULTIPLE) the steps render on a worker on every rank; without it the
+//              steps run inside pnb_execute and rank 0 says so once on stderr, checked here.
+//   LIGHTING async-skip: "async" with "backpressure": "skip" over many quick steps: every rank
+//              skips the same steps (no rank waits alone in a collective) and rank 0's database
+//              lists the others.
+//   LIGHTING budget: "budget" far below any step: every rank plans the same degraded steps.
 // Exits 0 on every rank when rank 0's pictures are the whole mesh's within RMS 0.1 % of 255 and
 // 2 levels (the runs of different ranks are composited in float32; the one-process render
 // stops a ray at opacity 0.999, the ranks' runs do not), else 1; the light volume on round-robin
 // cells has a wider bound (tolerance()).
 #include <mpi.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -145,12 +155,10 @@ bool same_pictures(const std::string& dir, const std::string& reference, bool fa
 }
 
 // What a run over several ranks refuses at creation, with a message naming it: image-space
-// occlusion with shadows (its gaps start at every ray sample), and "async" (its worker would
-// talk to the other ranks from a thread of its own). pnb_create_mpi fails on every rank.
-int refused(const std::string& dir, const std::string& backend, int rank, bool async) {
-  std::string c = config(dir, async ? "none" : "occlusion-image", backend, false);
-  if (async) c.insert(c.rfind('}'), R"(, "async": true)");
-  const std::string named = async ? "\"async\" is not available" : "\"image\" with shadows";
+// occlusion with shadows (its gaps start at every ray sample). pnb_create_mpi fails on every rank.
+int refused(const std::string& dir, const std::string& backend, int rank) {
+  const std::string c = config(dir, "occlusion-image", backend, false);
+  const std::string named = "\"image\" with shadows";
   pnb_context ctx = nullptr;
   const pnb_status s = pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx);
   const std::string text = pnb_last_error(nullptr);
@@ -240,10 +248,144 @@ int when_trigger(const std::string& dir, const Part& part, int rank) {
   return all ? 0 : 1;
 }
 
+// What `call` writes on stderr, taken from its file descriptor; returns what `call` returns.
+template <class Call>
+pnb_status stderr_of(Call&& call, std::string& text) {
+  std::fflush(stderr);
+  std::FILE* capture = std::tmpfile();
+  const int saved = dup(2);
+  if (capture) dup2(fileno(capture), 2);
+  const pnb_status s = call();
+  std::fflush(stderr);
+  if (capture) {
+    dup2(saved, 2);
+    std::rewind(capture);
+    char buffer[512];
+    std::size_t n = 0;
+    while ((n = std::fread(buffer, 1, sizeof buffer, capture)) > 0) text.append(buffer, n);
+    std::fclose(capture);
+  }
+  close(saved);
+  return s;
+}
+
+// "async" with "backpressure": "skip": twelve quick steps, so that workers are busy when steps
+// come. Every rank must skip the same steps (else a collective would wait on the ranks that
+// skipped: the test's TIMEOUT), and rank 0's database lists every step not skipped.
+int async_skip(const std::string& dir, const Part& part, int rank) {
+  std::string c = config(dir, "light-volume", "cpu", false);
+  c.insert(c.rfind('}'), R"(, "async": {"backpressure": "skip"})");
+  pnb_context ctx = nullptr;
+  int good = ok(nullptr, pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank) ? 1 : 0;
+  long long skipped = -1;
+  if (ctx) {
+    const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(part.mesh);
+    good = ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank) ? good : 0;
+    std::vector<double> values;
+    for (int k = 0; k < 12; ++k) {
+      values = penumbra::fixtures::sample(part.mesh, [k](double x, double y, double z) { return field_at(x, y, z, k % 2); });
+      pnb_field_desc f = PNB_FIELD_DESC_INIT;
+      f.name = "T", f.values = values.data(), f.count = static_cast<int64_t>(values.size());
+      pnb_publish_field(ctx, &f, PNB_BORROW);
+      good = ok(ctx, pnb_execute(ctx, k, k), "pnb_execute", rank) ? good : 0;
+      usleep(15000);  // a solver step: some steps find the workers done, some (on some ranks) not
+    }
+    good = ok(ctx, pnb_finalize(ctx), "pnb_finalize", rank) ? good : 0;
+    pnb_step_stats stats = PNB_STEP_STATS_INIT;
+    pnb_last_step(ctx, &stats);
+    skipped = static_cast<long long>(stats.skipped_steps);
+    pnb_destroy(ctx);
+  }
+  long long least = 0, most = 0;
+  MPI_Allreduce(&skipped, &least, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(&skipped, &most, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+  if (least != most) {
+    std::fprintf(stderr, "rank %d: skipped %lld steps; the ranks skipped %lld to %lld\n", rank, skipped, least, most);
+    good = 0;
+  }
+  if (rank == 0) {
+    std::ifstream csv(dir + "/data.csv");
+    long long lines = 0;
+    for (std::string line; std::getline(csv, line);) ++lines;
+    const long long expected = 1 + 2 * (12 - skipped);  // the header, then two cameras per step
+    std::printf("async skip: %lld of 12 steps skipped on every rank; data.csv has %lld lines\n", skipped, lines);
+    if (lines != expected) {
+      std::fprintf(stderr, "rank 0: data.csv has %lld lines, expected %lld\n", lines, expected);
+      good = 0;
+    }
+  }
+  int all = 0;
+  MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return all ? 0 : 1;
+}
+
+// "budget" far below any step: every rank plans the same degraded steps from the largest costs
+// (level 0 coarsened, the images smaller, one camera a step), and rank 0 lists what it gave up.
+int budget_steps(const std::string& dir, const Part& part, int rank) {
+  std::string c = config(dir, "light-volume", "cpu", false);
+  c.insert(c.rfind('}'), R"(, "budget": {"ms": 0.001})");
+  pnb_context ctx = nullptr;
+  int good = ok(nullptr, pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank) ? 1 : 0;
+  double plan[4] = {-1, -1, -1, -1};  // degraded bits, cameras, image scale, level 0
+  if (ctx) {
+    const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(part.mesh);
+    good = ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh", rank) ? good : 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto values = penumbra::fixtures::sample(part.mesh, [k](double x, double y, double z) { return field_at(x, y, z, k); });
+      pnb_field_desc f = PNB_FIELD_DESC_INIT;
+      f.name = "T", f.values = values.data(), f.count = static_cast<int64_t>(values.size());
+      pnb_publish_field(ctx, &f, PNB_BORROW);
+      good = ok(ctx, pnb_execute(ctx, k, k), "pnb_execute", rank) ? good : 0;
+    }
+    pnb_step_stats stats = PNB_STEP_STATS_INIT;
+    pnb_last_step(ctx, &stats);
+    plan[0] = stats.degraded, plan[1] = stats.cameras_rendered, plan[2] = stats.image_scale, plan[3] = stats.level0_resolution;
+    pnb_destroy(ctx);
+  }
+  double least[4], most[4];
+  MPI_Allreduce(plan, least, 4, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(plan, most, 4, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  for (int i = 0; i < 4; ++i)
+    if (least[i] != most[i]) {
+      std::fprintf(stderr, "rank %d: the ranks' plans differ in item %d (%g .. %g)\n", rank, i, least[i], most[i]);
+      good = 0;
+    }
+  const bool degraded = plan[1] == 1 && plan[2] == 0.25 && plan[3] == 16 && (static_cast<int>(plan[0]) & PNB_DEGRADED_CAMERAS);
+  if (!degraded) {
+    std::fprintf(stderr, "rank %d: degraded %g, cameras %g, image scale %g, level 0 %g\n", rank, plan[0], plan[1], plan[2], plan[3]);
+    good = 0;
+  }
+  if (rank == 0) {
+    std::ifstream csv(dir + "/data.csv");
+    std::string header, line;
+    std::getline(csv, header);
+    int rows = 0, degraded_rows = 0;
+    for (; std::getline(csv, line); ++rows) degraded_rows += line.find("level0:16+image:0.25+cameras:1/2") != std::string::npos;
+    std::printf("budget: %s; %d rows, %d of them degraded\n", header.c_str(), rows, degraded_rows);
+    if (header.find(",degraded,") == std::string::npos || rows != 4 || degraded_rows != 2) good = 0;
+  }
+  int all = 0;
+  MPI_Allreduce(&good, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return all ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  bool threads_multiple = false, async = false;
+  for (int a = 5; a < argc; ++a) {
+    threads_multiple = threads_multiple || std::string(argv[a]) == "threads=multiple";
+    async = async || std::string(argv[a]) == "async";
+  }
+  int provided = MPI_THREAD_SINGLE;
+  MPI_Init_thread(&argc, &argv, threads_multiple ? MPI_THREAD_MULTIPLE : MPI_THREAD_SINGLE, &provided);
+  if (threads_multiple && provided != MPI_THREAD_MULTIPLE) {
+    std::fprintf(stderr, "this MPI does not provide MPI_THREAD_MULTIPLE (gave %d)\n", provided);
+    MPI_Finalize();
+    return 1;
+  }
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
@@ -264,23 +406,34 @@ int main(int argc, char** argv) {
   const std::string dir = out + "/ranks", reference = out + "/serial";
   if (rank == 0) fs::remove_all(out);
   MPI_Barrier(MPI_COMM_WORLD);
-  if (lighting == "occlusion-image-refused") return refused(dir, backend, rank, false);
-  if (lighting == "async-refused") return refused(dir, backend, rank, true);
+  if (lighting == "occlusion-image-refused") return refused(dir, backend, rank);
+  if (lighting == "budget") return budget_steps(dir, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
+  if (lighting == "async-skip") return async_skip(dir, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (lighting == "when-trigger") return when_trigger(dir, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
   if (lighting == "tight-runs") return runs_over_budget(dir, backend, partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false), rank);
 
   const OwnedMesh whole = penumbra::fixtures::tet_block_with_hole(8);
   int good = 1;
   pnb_context ctx = nullptr;
-  if (!ok(nullptr, pnb_create_mpi(config(dir, lighting, backend, ghosts).c_str(), MPI_COMM_WORLD, &ctx), "pnb_create_mpi", rank))
+  std::string c = config(dir, lighting, backend, ghosts);
+  if (async) c.insert(c.rfind('}'), R"(, "async": true)");
+  std::string said;
+  const pnb_status created = stderr_of([&] { return pnb_create_mpi(c.c_str(), MPI_COMM_WORLD, &ctx); }, said);
+  std::fputs(said.c_str(), stderr);
+  if (!ok(nullptr, created, "pnb_create_mpi", rank)) good = 0;
+  if (async && !threads_multiple && rank == 0 && said.find("needs MPI_THREAD_MULTIPLE") == std::string::npos) {
+    std::fprintf(stderr, "rank 0: \"async\" below MPI_THREAD_MULTIPLE did not say that its steps run inside pnb_execute\n");
     good = 0;
+  }
   if (ctx) {
     good = run(ctx, partition(whole, kind, rank, ranks, ghosts), rank, fail, fail_rank) ? good : 0;
     pnb_destroy(ctx);
   }
   if (rank == 0) {
     pnb_context serial = nullptr;
-    if (!ok(nullptr, pnb_create(config(reference, lighting, backend, ghosts).c_str(), &serial), "pnb_create", rank)) good = 0;
+    std::string serial_config = config(reference, lighting, backend, ghosts);
+    if (async) serial_config.insert(serial_config.rfind('}'), R"(, "async": true)");
+    if (!ok(nullptr, pnb_create(serial_config.c_str(), &serial), "pnb_create", rank)) good = 0;
     if (serial) {
       good = run(serial, partition(whole, kind, 0, 1, false), rank, false, -1) ? good : 0;
       pnb_destroy(serial);

@@ -37,6 +37,19 @@ MpiRankGroup::~MpiRankGroup() {
   if (!finalized && m_comm != MPI_COMM_NULL) MPI_Comm_free(&m_comm);
 }
 
+std::shared_ptr<RankGroup> MpiRankGroup::duplicate() { return std::make_shared<MpiRankGroup>(m_comm); }
+
+std::string MpiRankGroup::threads_refused() const {
+  int provided = MPI_THREAD_SINGLE;
+  MPI_Query_thread(&provided);
+  switch (provided) {
+    case MPI_THREAD_MULTIPLE: return {};
+    case MPI_THREAD_SERIALIZED: return "MPI_THREAD_SERIALIZED";
+    case MPI_THREAD_FUNNELED: return "MPI_THREAD_FUNNELED";
+    default: return "MPI_THREAD_SINGLE";
+  }
+}
+
 std::vector<RankGroup::Failure> MpiRankGroup::failures(int code, const std::string& message) {
   const int mine[2] = {code, code != 0 ? static_cast<int>(message.size()) : 0};
   std::vector<int> all(2 * static_cast<std::size_t>(m_size));

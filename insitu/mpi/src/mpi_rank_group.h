@@ -28,6 +28,8 @@ public:
   std::vector<double> all_gather(const std::vector<double>& mine) override;
   std::vector<std::vector<double>> exchange(const std::vector<std::vector<double>>& to_each) override;
   render::Image composite(const render::RayRuns& runs, int width, int height) override;
+  std::shared_ptr<RankGroup> duplicate() override;
+  std::string threads_refused() const override;
 
 private:
   MPI_Comm m_comm = MPI_COMM_NULL;
