@@ -3,6 +3,7 @@
 #include "async_runner.h"
 
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <utility>
 
@@ -28,14 +29,60 @@ AsyncRunner::~AsyncRunner() {
 }
 
 void AsyncRunner::publish_mesh(const MeshView& mesh) {
+  const Publication how = publication_of(mesh);
+  if (how == Publication::unchanged) {
+    m_moved_points.reset();  // back where the last step left them
+    return;
+  }
+  if (how == Publication::moved) {
+    std::vector<Vec3d> points;
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      points = std::move(m_spare_points);
+    }
+    points.resize(mesh.point_count());
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = mesh.point(i);
+    m_moved_points = std::move(points);
+    return;
+  }
   wait_idle();
+  m_moved_points.reset();  // this publication replaces them
   const std::size_t before = m_context->mesh_preparations();
   m_context->publish_mesh(mesh);
+  note_prepared_mesh();
   // Fields were sized for the old mesh.
   if (m_context->mesh_preparations() != before) {
     m_copied.clear();
     m_borrowed.clear();
   }
+}
+
+AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh) const {
+  std::shared_ptr<const render::TetMesh> prepared;
+  bool moving = false;  // a step in the worker's hands moves the points: "unchanged" is relative to that
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    prepared = m_prepared;
+    moving = m_job && m_job->points;
+  }
+  if (!prepared || m_context->ranks().size() > 1 || mesh.ghost_cells) return Publication::here;
+  if (mesh.topology_version != m_prepared_version || mesh.point_count() != prepared->points.size()) return Publication::here;
+  bool moved = false;
+  for (std::size_t i = 0; i < mesh.point_count(); ++i) {
+    const Vec3d p = mesh.point(i);
+    // Coordinates the prepared mesh refuses (NaN, infinite) are refused here, at once.
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return Publication::here;
+    moved = moved || !(p == prepared->points[i]);
+  }
+  if (!moved) return moving ? Publication::moved : Publication::unchanged;
+  return render::keeps_welds(*prepared, mesh) ? Publication::moved : Publication::here;
+}
+
+void AsyncRunner::note_prepared_mesh() {
+  std::shared_ptr<const render::TetMesh> tets = m_context->prepared_tets();
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_prepared = std::move(tets);
+  if (m_prepared) m_prepared_version = m_prepared->topology_version;
 }
 
 void AsyncRunner::publish_field(const FieldView& field, bool copy) {
@@ -77,7 +124,8 @@ bool AsyncRunner::execute(double time, std::int64_t cycle) {
     handed_over = true;
     wait_idle();
     earlier = take_failure();
-    Job job{time, cycle, decision, copies_of(needs.fields, published)};
+    Job job{time, cycle, decision, copies_of(needs.fields, published), std::move(m_moved_points)};
+    m_moved_points.reset();
     {
       std::lock_guard<std::mutex> lock(m_mutex);
       m_job = std::move(job);
@@ -131,6 +179,7 @@ void AsyncRunner::run() {
     lock.unlock();
     std::optional<Failure> failure;
     try {
+      if (job.points) m_context->publish_mesh(m_context->moved_view(*job.points));
       for (const FieldCopy& f : job.fields) m_context->publish_field(f.view, false);
       m_context->run_step(job.time, job.cycle, job.decision);
     } catch (const Error& e) {
@@ -142,7 +191,10 @@ void AsyncRunner::run() {
     }
     m_context->drop_borrowed_fields();
     const StepStats stats = m_context->last_step();
+    std::shared_ptr<const render::TetMesh> tets = m_context->prepared_tets();
     lock.lock();
+    m_prepared = std::move(tets);
+    if (job.points) m_spare_points = std::move(*job.points);
     if (failure) m_failure = std::move(failure);  // the latest: the next call reports one, naming its cycle
     m_last_step = stats;
     m_spare = std::move(job.fields);

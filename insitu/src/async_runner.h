@@ -36,6 +36,10 @@ public:
   AsyncRunner(const AsyncRunner&) = delete;
   AsyncRunner& operator=(const AsyncRunner&) = delete;
 
+  /// A new topology (or points that break the prepared mesh's welds, or any mesh over several
+  /// ranks or with ghost cells) waits for the worker and is prepared here. Points that moved under
+  /// the prepared topology are copied and handed to the worker with the next step it takes, which
+  /// moves the geometry there; their errors (a tet the motion inverted) are that step's.
   void publish_mesh(const MeshView& mesh);
   /// Checked now (Context::check_field); borrowed fields are read by the next execute(), copied
   /// ones kept until replaced or the topology changes, as with a Context.
@@ -68,7 +72,14 @@ private:
     std::int64_t cycle = 0;
     StepDecision decision;
     std::vector<FieldCopy> fields;
+    std::optional<std::vector<Vec3d>> points;  ///< the mesh's points moved since the last step
   };
+  /// How a mesh is published: prepared here with the worker idle, the prepared mesh as the last
+  /// step left it, or its points moved (handed to the worker with the next step).
+  enum class Publication { here, unchanged, moved };
+  Publication publication_of(const MeshView& mesh) const;
+  /// The prepared mesh's counts and tets, after a publication here or a step the worker completed.
+  void note_prepared_mesh();
   void run();
   void wait_idle();
   bool busy();
@@ -82,11 +93,15 @@ private:
   std::map<std::string, FieldCopy> m_copied;     ///< published with copy = true
   std::map<std::string, FieldView> m_borrowed;   ///< published with copy = false, for the next step
   std::int64_t m_skipped = 0;
+  std::optional<std::vector<Vec3d>> m_moved_points;  ///< published, for the next step handed over
+  std::shared_ptr<const render::TetMesh> m_prepared;  ///< the prepared mesh as the last step left it
+  std::uint64_t m_prepared_version = 0;
 
   mutable std::mutex m_mutex;
   std::condition_variable m_wake;
   std::optional<Job> m_job;        ///< handed over, not yet completed
   std::vector<FieldCopy> m_spare;  ///< buffers of the last completed job, reused
+  std::vector<Vec3d> m_spare_points;
   std::optional<Failure> m_failure;  ///< the worker's, not yet thrown
   StepStats m_last_step;
   bool m_stopping = false;

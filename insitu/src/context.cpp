@@ -264,6 +264,8 @@ void Context::prepare_mesh(const MeshView& mesh, std::shared_ptr<const render::T
   p->view.cell_types = p->cell_types.data();
   m_mesh = std::move(p);
   point_view_at_tets();
+  m_topology = m_mesh->view;
+  m_topology.points.data = nullptr;  // the counts and the connectivity only: the points move
   ++m_preparations;
   // The store keeps this rank's own cells: a ghost is another rank's to keep.
   if (m_store) m_store->begin_segment(mesh.ghost_cells ? without_ghosts(mesh).view : m_mesh->view);
@@ -311,6 +313,16 @@ bool Context::points_moved(const MeshView& mesh) const {
   return false;
 }
 
+MeshView Context::moved_view(const std::vector<Vec3d>& points) const {
+  MeshView v = m_mesh->view;
+  v.points = {reinterpret_cast<const std::byte*>(points.data()), points.size(), sizeof(Vec3d)};
+  return v;
+}
+
+std::shared_ptr<const render::TetMesh> Context::prepared_tets() const {
+  return m_mesh ? m_mesh->tets : nullptr;
+}
+
 FieldView packed_copy(const FieldView& field, std::vector<std::byte>& bytes) {
   const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
   bytes.resize(item * field.values.count);
@@ -336,7 +348,7 @@ bool Context::check_field(const FieldView& field) const {
   require(field.type == ScalarType::float32 || field.type == ScalarType::float64, who + ": type must be float32 or float64");
   require(field.components >= 1, who + ": components must be >= 1, got " + std::to_string(field.components));
   const std::size_t expected =
-      field.association == Association::point ? m_mesh->view.point_count() : m_mesh->view.cell_count();
+      field.association == Association::point ? m_topology.point_count() : m_topology.cell_count();
   require(field.values.count == expected,
           who + " has " + std::to_string(field.values.count) + " values but the mesh has " + std::to_string(expected) +
               (field.association == Association::point ? " points" : " cells"));
@@ -781,7 +793,7 @@ void Context::observe_trigger_statistics(std::int64_t cycle, const std::map<std:
         throw Error(ErrorCode::invalid_operation, "pnb_execute: trigger.when reads field '" + name +
                                                       "', which was not published for cycle " + std::to_string(cycle) +
                                                       " (pnb_step_needs lists it at every step)");
-      const std::vector<double> v = point_values(m_mesh->view, it->second, ComponentMode::magnitude, 0);
+      const std::vector<double> v = point_values(m_topology, it->second, ComponentMode::magnitude, 0);
       const ValueRange r = finite_range(v);
       double sum = 0;
       for (double x : v)

@@ -133,6 +133,11 @@ public:
   bool on_any_rank(bool mine);
   /// The ranks' group (serial: one rank).
   const RankGroup& ranks() const { return *m_group; }
+  /// The prepared mesh (over the context's own copies of its connectivity) at `points`, for
+  /// publish_mesh: the same topology moved. Needs a prepared mesh.
+  MeshView moved_view(const std::vector<Vec3d>& points) const;
+  /// The prepared tet mesh (null before the first mesh): immutable, so another thread may read it.
+  std::shared_ptr<const render::TetMesh> prepared_tets() const;
 
   /// publish_field's checks alone, storing nothing: false for a field the config does not use,
   /// Error for one it refuses.
@@ -296,6 +301,9 @@ private:
   bool m_cpu_fallback = false;           ///< "auto": a mesh the GPU cannot hold renders on the CPU
   std::unique_ptr<PreparedMesh> m_mesh;
   std::map<std::string, HeldField> m_fields;
+  /// The prepared mesh's counts and connectivity, without its points: what the step's decision
+  /// and the fields' checks read, left alone when the points move (on an asynchronous worker).
+  MeshView m_topology;
   std::vector<std::string> m_field_labels;  ///< value of the `field` column per config entry
   StepStats m_last_step;
   std::optional<std::chrono::steady_clock::time_point> m_first_execute;  ///< the adaptive cadence's start

@@ -88,6 +88,81 @@ TEST(AsyncRunner, WritesWhatASynchronousRunWritesWhileTheSolverReusesItsArrays) 
   EXPECT_GT(sync_files.size(), 10u);
 }
 
+// A mesh whose points move every step (and once back where they were, and once while the
+// previous step is still on the worker), published before each step's field.
+fixtures::OwnedMesh moved_mesh(int step) {
+  fixtures::OwnedMesh m = fixtures::block(BlockCells::hexes, 6, 6, 5, {0, 0, 0}, {1, 1, 1});
+  if (step != 4) fixtures::swirl(m, {0.5, 0.5, 0}, 0.6, 0.05 * step);
+  return m;
+}
+
+TEST(AsyncRunner, AMovingMeshHandsItsPointsToTheWorkerAndWritesWhatASynchronousRunWrites) {
+  TempDir tmp;
+  const std::string lit = R"(, "lighting": {"model": "light-volume", "level0_resolution": 24,
+                                             "lights": [{"type": "directional", "direction": [1, 0.5, -1]}]})";
+  const auto field = [](const fixtures::OwnedMesh& m, int k) {
+    return fixtures::sample(m, [k](double x, double y, double z) { return x + 0.3 * std::sin(0.7 * k + 3 * y) + z; });
+  };
+  {
+    Context sync(parse_config(config(tmp / "sync", lit)));
+    for (int k = 0; k < 9; ++k) {
+      const fixtures::OwnedMesh m = moved_mesh(k);
+      sync.publish_mesh(m.view());
+      const auto v = field(m, k);
+      sync.publish_field(fixtures::point_field("T", v), false);
+      sync.execute(0.1 * k, k);
+    }
+    sync.finalize();
+  }
+  {
+    AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp / "async", lit + R"(, "async": true)"))), false);
+    for (int k = 0; k < 9; ++k) {
+      fixtures::OwnedMesh m = moved_mesh(k);
+      async.publish_mesh(m.view());
+      const auto v = field(m, k);
+      async.publish_field(fixtures::point_field("T", v), false);
+      async.execute(0.1 * k, k);
+      std::fill(m.xyz.begin(), m.xyz.end(), std::nan(""));  // the step must have taken its copy
+    }
+    async.finalize();
+  }
+  const auto sync_files = files_under(tmp / "sync"), async_files = files_under(tmp / "async");
+  EXPECT_EQ(sync_files.size(), async_files.size());
+  for (const auto& [name, bytes] : sync_files) {
+    const auto it = async_files.find(name);
+    ASSERT_NE(it, async_files.end()) << name;
+    EXPECT_TRUE(it->second == bytes) << name << " differs";
+  }
+}
+
+TEST(AsyncRunner, AMotionThatInvertsACellIsTheNextCallsErrorAndTheRunGoesOn) {
+  TempDir tmp;
+  AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp.path(), R"(, "async": true)"))), false);
+  fixtures::OwnedMesh m = moved_mesh(0);
+  async.publish_mesh(m.view());
+  const auto v = fixtures::sample(m, [](double x, double, double) { return x; });
+  async.publish_field(fixtures::point_field("T", v), false);
+  EXPECT_TRUE(async.execute(0, 0));
+  const std::size_t p = 3 + 7 * (3 + 7 * 2);  // an interior point pushed through its neighbours
+  m.xyz[3 * p + 2] += 0.5;
+  EXPECT_NO_THROW(async.publish_mesh(m.view()));  // handed over with the next step
+  async.publish_field(fixtures::point_field("T", v), false);
+  EXPECT_TRUE(async.execute(0.2, 2));
+  m.xyz[3 * p + 2] -= 0.5;
+  async.publish_mesh(m.view());
+  async.publish_field(fixtures::point_field("T", v), false);
+  try {
+    async.execute(0.4, 4);
+    ADD_FAILURE() << "the inverted cell of step 2 was not reported";
+  } catch (const Error& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("by the points' motion"), std::string::npos) << text;
+    EXPECT_NE(text.find("cycle 2, rendered asynchronously"), std::string::npos) << text;
+  }
+  EXPECT_NO_THROW(async.finalize());
+  EXPECT_EQ(async.last_step().cycle, 4);
+}
+
 TEST(AsyncRunner, AWorkersFailureIsTheNextCallsStatusNamingItsCycle) {
   TempDir tmp;
   AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp.path(), R"(, "async": true)"))), false);
