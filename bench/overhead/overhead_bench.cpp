@@ -4,7 +4,7 @@
 //
 // Usage: pnb_bench_overhead --scene NAME --data-dir DIR [--steps 40] [--every 10] [--runs 3]
 //        [--size 256] [--modes "sync async"] [--lighting "none light-volume occlusion"]
-//        [--stores "off on"] [--moving "off on"] [--sweeps 30]
+//        [--stores "off on"] [--moving "off on"] [--sweeps 30] [--limits "budget max_share"]
 // The solver: `sweeps` sweeps of a diffusion of its field over the mesh's tets per step (a gather
 // and a scatter per tet, the memory-bound work of an unstructured solver's step: about 0.3 ms per
 // sweep per 100K tets here), and with --moving on a swirl of its points too, republished every
@@ -20,6 +20,10 @@
 //   execute_ms_per_image_per_mtet  sync: that step per image per million tets
 //   published_bytes, memcpy_ms     the bytes the step reads, and one memcpy of them, same run
 //   skipped_steps        the async worker's skipped steps ("wait" back-pressure: 0 expected)
+// With --limits, two more synchronous light-volume lines per scene: "budget": {"share": 1} (a
+// rendering step may take one solver step's time: budget_share, degraded_steps, what the last
+// one gave up) and "trigger": {"max_share": 0.2} (the adaptive cadence: max_share, and
+// rendered_steps of the steps the cycle rule renders).
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -46,6 +50,8 @@ namespace {
 struct Setup {
   std::string mode, lighting, store, moving;
   int steps = 40, every = 10, size = 256, sweeps = 30;
+  double budget_share = 0;  ///< "budget": {"share"}; 0 = none
+  double max_share = 0;     ///< "trigger": {"max_share"}; 0 = none
 };
 
 void check(pnb_status s, pnb_context ctx, const char* what) {
@@ -64,7 +70,10 @@ std::string config(const pb::Scene& scene, const std::string& dir, const Setup& 
             {"image", {{"width", s.size}, {"height", s.size}}},
             {"cameras", {{"phi", {30}}, {"theta", {25}}}},
             {"fields", {{{"name", "u"}, {"transfer_function", tf}}}},
-            {"trigger", {{"every_cycles", s.every}}}};
+            {"trigger", {{"every_cycles", s.every}}},
+            {"progress", {{"log", dir + "/progress.jsonl"}}}};
+  if (s.max_share > 0) c["trigger"]["max_share"] = s.max_share;
+  if (s.budget_share > 0) c["budget"] = {{"share", s.budget_share}};
   const json light = {{"type", "directional"}, {"direction", {-1, -0.4, -0.8}}};
   if (s.lighting == "light-volume") c["lighting"] = {{"model", "light-volume"}, {"lights", {light}}};
   if (s.lighting == "occlusion") c["lighting"] = {{"model", "occlusion"}, {"lights", {light}}};
@@ -107,13 +116,27 @@ struct RunResult {
   double total_ms = 0;
   std::vector<double> visible_ms;
   std::int64_t skipped = 0;
+  int rendered = 0, degraded = 0;
+  std::string last_degradation;
 };
+
+/// What a synchronous step gave up, in the database's words.
+std::string degradation_text(const pnb_step_stats& s) {
+  std::string t;
+  const auto add = [&t](const std::string& part) { t += (t.empty() ? "" : "+") + part; };
+  if (s.degraded & PNB_DEGRADED_LIGHT) add("light");
+  if (s.degraded & PNB_DEGRADED_LEVEL0) add("level0:" + std::to_string(s.level0_resolution));
+  if (s.degraded & PNB_DEGRADED_IMAGE) add("image:" + std::to_string(s.image_scale).substr(0, 6));
+  if (s.degraded & PNB_DEGRADED_CAMERAS) add("cameras:" + std::to_string(s.cameras_rendered));
+  return t.empty() ? "none" : t;
+}
 
 RunResult run(const pb::Scene& scene, const std::string& dir, const Setup& s, bool with_penumbra) {
   Solver solver(scene);
   RunResult r;
   pnb_context ctx = nullptr;
   fs::remove_all(dir);
+  fs::create_directories(dir);
   pb::Stopwatch clock;
   if (with_penumbra) check(pnb_create(config(scene, dir, s).c_str(), &ctx), nullptr, "pnb_create");
   pnb_mesh_desc mesh = pb::scene_mesh_desc(scene);
@@ -134,7 +157,14 @@ RunResult run(const pb::Scene& scene, const std::string& dir, const Setup& s, bo
     }
     pb::Stopwatch visible;
     check(pnb_execute(ctx, k, k), ctx, "pnb_execute");
-    if (needs.renders) r.visible_ms.push_back(visible.ms());
+    if (!needs.renders) continue;
+    r.visible_ms.push_back(visible.ms());
+    if (s.mode != "sync") continue;
+    pnb_step_stats stats = PNB_STEP_STATS_INIT;
+    pnb_last_step(ctx, &stats);
+    if (stats.cycle != k) continue;  // left out by the adaptive cadence
+    ++r.rendered;
+    if (stats.degraded) ++r.degraded, r.last_degradation = degradation_text(stats);
   }
   if (ctx) {
     check(pnb_finalize(ctx), ctx, "pnb_finalize");
@@ -161,6 +191,7 @@ double memcpy_ms(std::size_t bytes) {
 json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s, int runs) {
   std::vector<double> alone, with, visible;
   std::int64_t skipped = 0;
+  RunResult last;
   const std::string dir = data_dir + "/overhead";
   for (int i = 0; i < runs; ++i) {
     // Alternated, so that neither side always runs on a warmer or quieter machine.
@@ -169,6 +200,7 @@ json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s
     with.push_back(r.total_ms);
     visible.insert(visible.end(), r.visible_ms.begin(), r.visible_ms.end());
     skipped += r.skipped;
+    last = r;
   }
   const double a = pb::median(alone), w = pb::median(with);
   const std::size_t bytes = 8 * scene.point_count() * (s.moving == "on" ? 4 : 1);
@@ -191,6 +223,16 @@ json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s
   line["published_bytes"] = bytes;
   line["memcpy_ms"] = pb::rounded(memcpy_ms(bytes), 3);
   line["skipped_steps"] = skipped;
+  if (s.budget_share > 0) {
+    line["budget_share"] = s.budget_share;
+    line["degraded_steps"] = last.degraded;
+    line["last_degradation"] = last.last_degradation.empty() ? "none" : last.last_degradation;
+  }
+  if (s.max_share > 0) {
+    line["max_share"] = s.max_share;
+    line["rendered_steps"] = last.rendered;
+    line["cycle_rule_steps"] = (s.steps + s.every - 1) / s.every;
+  }
   line["runs"] = runs;
   line["width"] = s.size;
   line["load_avg"] = pb::load_average();
@@ -223,6 +265,13 @@ int run_all(int argc, char** argv) {
           s.mode = mode, s.lighting = lighting, s.store = store, s.moving = moving;
           std::cout << measure(scene, data_dir, s, runs).dump() << std::endl;
         }
+  for (const std::string& limit : words(pb::option(argc, argv, "limits", "budget max_share"))) {
+    Setup s = base;
+    s.mode = "sync", s.lighting = "light-volume", s.store = "off", s.moving = "off";
+    if (limit == "budget") s.budget_share = 1;
+    if (limit == "max_share") s.max_share = 0.2;
+    std::cout << measure(scene, data_dir, s, runs).dump() << std::endl;
+  }
   return 0;
 }
 
