@@ -308,6 +308,7 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
     stats.degraded = degradation_bits(s.degradation);
     stats.cameras_rendered = s.degradation.cameras;
     stats.level0_resolution = s.degradation.level0_resolution;
+    stats.status = static_cast<pnb_status>(s.status);
     penumbra::insitu::write_sized(stats, out, kFirstStepStatsBytes, "pnb_last_step", "pnb_step_stats", "PNB_STEP_STATS_INIT");
   });
 }

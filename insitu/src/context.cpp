@@ -760,7 +760,8 @@ bool Context::run_step(double time, std::int64_t cycle, const StepDecision& deci
   s.other_ms = std::max(0.0, s.total_ms - (s.store_ms + s.gather_ms + s.light_ms + s.render_ms + s.composite_ms + s.write_ms));
   s.degradation = step_degradation();
   log_progress(time, bytes_before, failures);
-  report(failures);
+  s.status = failures.code;
+  report(failures, &s.status);
   return true;
 }
 
@@ -844,12 +845,14 @@ StepNeeds Context::step_needs(double time, std::int64_t cycle) const {
   return needs;
 }
 
-void Context::report(const StepFailures& failures) {
+void Context::report(const StepFailures& failures, ErrorCode* status) {
   if (m_group->size() == 1) return failures.rethrow();
   // A failure on one rank alone (a write on rank 0) is every rank's status.
   const auto failed = m_group->failures(static_cast<int>(failures.code), failures.text);
   if (failed.empty()) return;
-  throw Error(static_cast<ErrorCode>(failed.front().code), ranks_text(failed, m_group->size()));
+  const auto code = static_cast<ErrorCode>(failed.front().code);
+  if (status) *status = code;
+  throw Error(code, ranks_text(failed, m_group->size()));
 }
 
 void Context::store_fields(double time, std::int64_t cycle, StepValues& values, StepFailures& failures) {

@@ -51,6 +51,9 @@ struct StepStats {
   double rendered_pixels = 0;
   double light_piece_ms = 0;
   bool light_converged = true;
+  /// The step's own outcome: ok, or the code of the error its execute threw (over ranks, the
+  /// agreed one; asynchronously, the next call's).
+  ErrorCode status = ErrorCode::ok;
 };
 
 /// The first half of a step, decided where the solver calls (Context::decide_step): whether it
@@ -246,8 +249,9 @@ private:
   void note_light_update(std::size_t index);
   /// The plan's degradation with the light's part as it turned out.
   Degradation step_degradation() const;
-  /// The step's failures: thrown, on every rank when any rank had one.
-  void report(const StepFailures& failures);
+  /// The step's failures: thrown, on every rank when any rank had one; the agreed code also into
+  /// `status` when given.
+  void report(const StepFailures& failures, ErrorCode* status = nullptr);
   /// The composite stage: a view's image over the background; with several ranks their runs
   /// merged first. Empty on ranks other than 0 (rank 0 writes the database).
   std::optional<ComposedImage> composite(RenderedView&& view);

@@ -329,7 +329,8 @@ static void test_budget(const char* tmp) {
   }
   expect(pnb_last_step(ctx, &stats), PNB_OK, ctx, NULL, "last step, budget");
   check(stats.budget_ms == 0.0001 && stats.degraded == (PNB_DEGRADED_IMAGE | PNB_DEGRADED_CAMERAS) &&
-            stats.image_scale == 0.25 && stats.cameras_rendered == 1 && stats.level0_resolution == 0 && stats.images == 1,
+            stats.image_scale == 0.25 && stats.cameras_rendered == 1 && stats.level0_resolution == 0 && stats.images == 1 &&
+            stats.status == PNB_OK,
         "budget: an unlit step gives up image size, then cameras", NULL);
   pnb_destroy(ctx);
 }

@@ -176,14 +176,17 @@ typedef struct {
    * degraded holds the PNB_DEGRADED_* bits taken, image_scale the fraction of the configured width
    * and height the images were rendered at (then enlarged to it), cameras_rendered how many of
    * the configured cameras rendered, level0_resolution the light volume's coarsened level 0
-   * (0: as configured). */
+   * (0: as configured). status is the step's own outcome: PNB_OK, or the error its pnb_execute
+   * returned (with "async", the error the next pnb_execute or pnb_finalize returns, naming the
+   * step's cycle; over MPI ranks the same on every rank). */
   double budget_ms;
   double image_scale;
   int degraded;
   int cameras_rendered;
   int level0_resolution;
+  pnb_status status;
 } pnb_step_stats;
-#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define PNB_STEP_STATS_INIT {sizeof(pnb_step_stats), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, PNB_OK}
 /* pnb_step_stats.degraded, in the order a step over its budget gives them up. */
 #define PNB_DEGRADED_LIGHT 1   /* the light volume stopped short: it converges over the next steps */
 #define PNB_DEGRADED_LEVEL0 2  /* the light volume's level 0 coarsened */

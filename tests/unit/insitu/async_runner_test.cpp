@@ -185,6 +185,19 @@ TEST(AsyncRunner, AWorkersFailureIsTheNextCallsStatusNamingItsCycle) {
   EXPECT_EQ(async.last_step().cycle, 4);
 }
 
+TEST(AsyncRunner, ALastStepSaysWhetherItFailed) {
+  TempDir tmp;
+  AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp.path(), R"(, "async": true)"))), false);
+  async.publish_mesh(mesh().view());
+  const auto v = wave(0);
+  async.publish_field(fixtures::point_field("T", v), false);
+  EXPECT_TRUE(async.execute(0, 0));
+  EXPECT_TRUE(async.execute(0.2, 2));  // T not published
+  EXPECT_THROW(async.finalize(), Error);
+  EXPECT_EQ(async.last_step().cycle, 2);
+  EXPECT_EQ(async.last_step().status, ErrorCode::invalid_operation);
+}
+
 TEST(AsyncRunner, SkipsStepsWhileTheWorkerIsBusyAndCountsThem) {
   TempDir tmp;
   const std::string c = testing::small_config(tmp / "db2", R"([{"name": "T"}])",

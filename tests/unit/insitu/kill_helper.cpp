@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // tests/unit/insitu/kill_helper.cpp -- a "solver" that renders steps until it is killed.
-// Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS [STORE_DIR [moving]]
+// Usage: penumbra_insitu_kill_helper OUTPUT_DIR FIRST_CYCLE STEPS IF_EXISTS [STORE_DIR] [moving] [async]
 // With STORE_DIR the run also keeps its compressed history there (windows of 8 steps); with
-// "moving" its points move every step (fixtures::swirl by 0.01 per cycle) under one topology.
+// "moving" its points move every step (fixtures::swirl by 0.01 per cycle) under one topology;
+// with "async" its steps render on Penumbra's worker thread.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,13 +13,19 @@
 #include "penumbra/penumbra.h"
 
 int main(int argc, char** argv) {
-  if (argc < 5 || argc > 7) return 2;
-  const bool moving = argc == 7 && std::string(argv[6]) == "moving";
-  const std::string store =
-      argc >= 6 ? R"(, "store": {"directory": ")" + std::string(argv[5]) + R"(", "window": 8})" : std::string();
+  if (argc < 5 || argc > 8) return 2;
+  bool moving = false, async = false;
+  std::string store;
+  for (int a = 5; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "moving") moving = true;
+    else if (arg == "async") async = true;
+    else store = R"(, "store": {"directory": ")" + arg + R"(", "window": 8})";
+  }
   const std::string config = R"({"output": {"directory": ")" + std::string(argv[1]) + R"(", "if_exists": ")" +
                              argv[4] + R"("}, "image": {"width": 32, "height": 32},
-      "cameras": {"phi": [0, 120, 240], "theta": [20]}, "fields": [{"name": "T"}, {"name": "T2"}])" + store + "}";
+      "cameras": {"phi": [0, 120, 240], "theta": [20]}, "fields": [{"name": "T"}, {"name": "T2"}])" + store +
+                             (async ? R"(, "async": true)" : "") + "}";
   pnb_context ctx = nullptr;
   if (pnb_create(config.c_str(), &ctx) != PNB_OK) {
     std::fprintf(stderr, "%s\n", pnb_last_error(nullptr));

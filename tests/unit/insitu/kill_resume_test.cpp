@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <thread>
+#include <vector>
 
 #include "cinema_database.h"
 #include "database_checks.h"
@@ -27,12 +28,15 @@ using testing::TempDir;
 
 /// Starts the helper solver; returns its pid.
 pid_t spawn_solver(const std::string& dir, long first, long steps, const char* if_exists,
-                   const std::string& store = "", bool moving = false) {
+                   const std::string& store = "", bool moving = false, bool async = false) {
   const std::string f = std::to_string(first), s = std::to_string(steps);
-  const char* argv[] = {PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists,
-                        store.empty() ? nullptr : store.c_str(), moving ? "moving" : nullptr, nullptr};
+  std::vector<const char*> argv{PNB_KILL_HELPER, dir.c_str(), f.c_str(), s.c_str(), if_exists};
+  if (!store.empty()) argv.push_back(store.c_str());
+  if (moving) argv.push_back("moving");
+  if (async) argv.push_back("async");
+  argv.push_back(nullptr);
   pid_t pid = -1;
-  if (posix_spawn(&pid, PNB_KILL_HELPER, nullptr, nullptr, const_cast<char**>(argv), environ) != 0) return -1;
+  if (posix_spawn(&pid, PNB_KILL_HELPER, nullptr, nullptr, const_cast<char**>(argv.data()), environ) != 0) return -1;
   return pid;
 }
 
@@ -50,8 +54,8 @@ std::size_t listed_rows(const std::string& dir) {
 
 // Starts a solver with a store (moving points or not), SIGKILLs it once `steps` steps are listed
 // (6 images each; at most a minute) and returns whether the kill ended it.
-bool kill_after_steps(const std::string& dir, const std::string& store, bool moving, std::size_t steps) {
-  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store, moving);
+bool kill_after_steps(const std::string& dir, const std::string& store, bool moving, std::size_t steps, bool async = false) {
+  const pid_t pid = spawn_solver(dir, 0, 100000, "error", store, moving, async);
   if (pid <= 0) return false;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (listed_rows(dir) < 6 * steps && std::chrono::steady_clock::now() < deadline)
@@ -60,12 +64,13 @@ bool kill_after_steps(const std::string& dir, const std::string& store, bool mov
   return WIFSIGNALED(wait_exit(pid));
 }
 
-TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
+// Kills the helper solver at several points of a step (right after a commit is seen and some time
+// into the next), checks the database it left and resumes it.
+void kill_and_resume(bool async) {
   TempDir tmp;
-  // Kill at several points of a step: right after a commit is seen and some time into the next.
   for (int round = 0; round < 3; ++round) {
     const std::string dir = tmp / ("db" + std::to_string(round));
-    const pid_t pid = spawn_solver(dir, 0, 100000, "error");
+    const pid_t pid = spawn_solver(dir, 0, 100000, "error", "", false, async);
     ASSERT_GT(pid, 0);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     const std::size_t wanted = 6 * static_cast<std::size_t>(round + 1);  // 6 images per step
@@ -81,13 +86,18 @@ TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) {
 
     // Resume: the same directory with if_exists "resume" appends later cycles.
     const long next = static_cast<long>((table.size() - 1) / 6);
-    ASSERT_EQ(wait_exit(spawn_solver(dir, next, 2, "resume")), 0);
+    ASSERT_EQ(wait_exit(spawn_solver(dir, next, 2, "resume", "", false, async)), 0);
     const auto resumed = testing::check_valid_database(dir);
     ASSERT_EQ(resumed.size(), table.size() + 12);
     for (std::size_t r = 0; r < table.size(); ++r) EXPECT_EQ(resumed[r], table[r]) << "row " << r << " changed";
     testing::expect_no_temporaries(dir);
   }
 }
+
+TEST(KillSafety, DatabaseOfKilledSolverIsValidAndResumable) { kill_and_resume(false); }
+
+// With "async" the kill lands while the worker writes: the database is as valid.
+TEST(KillSafety, DatabaseOfAKilledAsynchronousSolverIsValidAndResumable) { kill_and_resume(true); }
 
 TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
   TempDir tmp;
@@ -111,10 +121,10 @@ TEST(KillSafety, StoreOfKilledSolverKeepsEveryFinishedWindow) {
 
 // A Lagrangian run killed mid-window: its one segment reopens with the steps whose fields and
 // coordinates are both whole, each step's points where the solver had them (within the bound).
-TEST(KillSafety, StoreOfAKilledMovingSolverReopens) {
+void check_killed_moving_store(bool async) {
   TempDir tmp;
   const std::string dir = tmp / "db", store = tmp / "store";
-  ASSERT_TRUE(kill_after_steps(dir, store, true, 20)) << "the solver ended before it was killed";
+  ASSERT_TRUE(kill_after_steps(dir, store, true, 20, async)) << "the solver ended before it was killed";
   EXPECT_FALSE(std::filesystem::exists(store + "/segment-001"));
   auto run = StoredRun::open(store + "/segment-000");
   ASSERT_TRUE(run->points_move());
@@ -131,6 +141,11 @@ TEST(KillSafety, StoreOfAKilledMovingSolverReopens) {
     EXPECT_LT(worst, 1e-2) << "step " << s;  // the bound: 1/16 of a 1/6-cube tet's altitude
   }
 }
+
+TEST(KillSafety, StoreOfAKilledMovingSolverReopens) { check_killed_moving_store(false); }
+
+// Asynchronous, the moved points reach the worker with the step: the store is as whole.
+TEST(KillSafety, StoreOfAKilledAsynchronousMovingSolverReopens) { check_killed_moving_store(true); }
 
 TEST(KillSafety, ErrorModeRefusesTheLeftDatabase) {
   TempDir tmp;
