@@ -17,6 +17,8 @@
 //   overhead_pct         (with Penumbra - alone) / alone over the whole run, pnb_finalize included
 //   execute_visible_ms   median time a rendering step's pnb_execute kept the solver (async: the
 //                        decision and the copy of the fields; sync: the whole step)
+//   publish_visible_ms   median time a rendering step's pnb_publish_mesh and pnb_publish_field
+//                        kept the solver (with a moving mesh, the copy of its points)
 //   execute_ms_per_image_per_mtet  sync: that step per image per million tets
 //   published_bytes, memcpy_ms     the bytes the step reads, and one memcpy of them, same run
 //   skipped_steps        the async worker's skipped steps ("wait" back-pressure: 0 expected)
@@ -119,7 +121,7 @@ struct Solver {
 struct RunResult {
   double total_ms = 0;
   double solver_ms = 0;  ///< in the solver's own steps
-  std::vector<double> visible_ms;
+  std::vector<double> visible_ms, publish_ms;
   std::int64_t skipped = 0;
   int rendered = 0, degraded = 0, over_budget = 0;
   std::string last_degradation;
@@ -154,6 +156,7 @@ RunResult run(const pb::Scene& scene, const std::string& dir, const Setup& s, bo
     if (!ctx) continue;
     pnb_needs needs = PNB_NEEDS_INIT;
     check(pnb_step_needs(ctx, k, k, &needs), ctx, "pnb_step_needs");
+    pb::Stopwatch publishing;
     if (needs.needs_mesh || s.moving == "on") check(pnb_publish_mesh(ctx, &mesh, PNB_BORROW), ctx, "pnb_publish_mesh");
     if (needs.field_count > 0) {
       pnb_field_desc f = PNB_FIELD_DESC_INIT;
@@ -162,10 +165,12 @@ RunResult run(const pb::Scene& scene, const std::string& dir, const Setup& s, bo
       f.count = static_cast<int64_t>(solver.u.size());
       check(pnb_publish_field(ctx, &f, PNB_BORROW), ctx, "pnb_publish_field");
     }
+    const double publish_ms = publishing.ms();
     pb::Stopwatch visible;
     check(pnb_execute(ctx, k, k), ctx, "pnb_execute");
     if (!needs.renders) continue;
     r.visible_ms.push_back(visible.ms());
+    r.publish_ms.push_back(publish_ms);
     if (s.mode != "sync") continue;
     pnb_step_stats stats = PNB_STEP_STATS_INIT;
     pnb_last_step(ctx, &stats);
@@ -197,7 +202,7 @@ double memcpy_ms(std::size_t bytes) {
 }
 
 json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s, int runs) {
-  std::vector<double> alone, with, visible, solving_alone, solving_with;
+  std::vector<double> alone, with, visible, publishing, solving_alone, solving_with;
   std::int64_t skipped = 0;
   RunResult last;
   const std::string dir = data_dir + "/overhead";
@@ -212,6 +217,7 @@ json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s
     // A budget's first two rendering steps measure, then coarsen level 0 once: set-up, not steady.
     const std::size_t skip = s.budget_share > 0 && r.visible_ms.size() > 2 ? 2 : 0;
     visible.insert(visible.end(), r.visible_ms.begin() + static_cast<std::ptrdiff_t>(skip), r.visible_ms.end());
+    publishing.insert(publishing.end(), r.publish_ms.begin(), r.publish_ms.end());
     skipped += r.skipped;
     last = r;
   }
@@ -231,6 +237,7 @@ json measure(const pb::Scene& scene, const std::string& data_dir, const Setup& s
   line["solver_ms_per_step"] = pb::rounded(a / s.steps, 2);
   line["overhead_pct"] = pb::rounded(100 * (w - a) / a, 1);
   line["execute_visible_ms"] = pb::rounded(pb::median(visible), 2);
+  line["publish_visible_ms"] = pb::rounded(pb::median(publishing), 2);
   if (s.mode == "sync")
     line["execute_ms_per_image_per_mtet"] = pb::rounded(pb::median(visible) / (scene.tet_count() / 1e6), 1);
   line["published_bytes"] = bytes;

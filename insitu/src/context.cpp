@@ -326,7 +326,11 @@ std::shared_ptr<const render::TetMesh> Context::prepared_tets() const {
 FieldView packed_copy(const FieldView& field, std::vector<std::byte>& bytes) {
   const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
   bytes.resize(item * field.values.count);
-  for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&bytes[i * item], field.values.at(i), item);
+  // A packed array (the usual case) is one copy; a strided one, a copy per value.
+  if (field.values.stride_bytes == static_cast<std::ptrdiff_t>(item) && !bytes.empty())
+    std::memcpy(bytes.data(), field.values.data, bytes.size());
+  else
+    for (std::size_t i = 0; i < field.values.count; ++i) std::memcpy(&bytes[i * item], field.values.at(i), item);
   FieldView copy = field;
   copy.values = {bytes.data(), field.values.count, static_cast<std::ptrdiff_t>(item)};
   return copy;

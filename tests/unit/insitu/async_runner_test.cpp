@@ -163,39 +163,41 @@ TEST(AsyncRunner, AMotionThatInvertsACellIsTheNextCallsErrorAndTheRunGoesOn) {
   EXPECT_EQ(async.last_step().cycle, 4);
 }
 
+// A runner that rendered step 0 and was handed step 2 without its field T: step 2 fails on the worker.
+std::unique_ptr<AsyncRunner> runner_with_a_failing_step(const std::string& dir, const std::vector<double>& v) {
+  auto async = std::make_unique<AsyncRunner>(std::make_unique<Context>(parse_config(config(dir, R"(, "async": true)"))), false);
+  async->publish_mesh(mesh().view());
+  async->publish_field(fixtures::point_field("T", v), false);
+  EXPECT_TRUE(async->execute(0, 0));
+  EXPECT_TRUE(async->execute(0.2, 2));  // T not published: handed over all the same
+  return async;
+}
+
 TEST(AsyncRunner, AWorkersFailureIsTheNextCallsStatusNamingItsCycle) {
   TempDir tmp;
-  AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp.path(), R"(, "async": true)"))), false);
-  async.publish_mesh(mesh().view());
   const auto v = wave(0);
-  async.publish_field(fixtures::point_field("T", v), false);
-  EXPECT_TRUE(async.execute(0, 0));
-  EXPECT_TRUE(async.execute(0.2, 2));  // T not published: handed over all the same
+  const auto async = runner_with_a_failing_step(tmp.path(), v);
   try {
-    async.publish_field(fixtures::point_field("T", v), false);
-    async.execute(0.3, 3);
+    async->publish_field(fixtures::point_field("T", v), false);
+    async->execute(0.3, 3);
     ADD_FAILURE() << "step 2's failure was not reported";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::invalid_operation);
     EXPECT_NE(std::string(e.what()).find("cycle 2, rendered asynchronously"), std::string::npos) << e.what();
   }
-  async.publish_field(fixtures::point_field("T", v), false);
-  EXPECT_TRUE(async.execute(0.4, 4));
-  EXPECT_NO_THROW(async.finalize());
-  EXPECT_EQ(async.last_step().cycle, 4);
+  async->publish_field(fixtures::point_field("T", v), false);
+  EXPECT_TRUE(async->execute(0.4, 4));
+  EXPECT_NO_THROW(async->finalize());
+  EXPECT_EQ(async->last_step().cycle, 4);
 }
 
 TEST(AsyncRunner, ALastStepSaysWhetherItFailed) {
   TempDir tmp;
-  AsyncRunner async(std::make_unique<Context>(parse_config(config(tmp.path(), R"(, "async": true)"))), false);
-  async.publish_mesh(mesh().view());
   const auto v = wave(0);
-  async.publish_field(fixtures::point_field("T", v), false);
-  EXPECT_TRUE(async.execute(0, 0));
-  EXPECT_TRUE(async.execute(0.2, 2));  // T not published
-  EXPECT_THROW(async.finalize(), Error);
-  EXPECT_EQ(async.last_step().cycle, 2);
-  EXPECT_EQ(async.last_step().status, ErrorCode::invalid_operation);
+  const auto async = runner_with_a_failing_step(tmp.path(), v);
+  EXPECT_THROW(async->finalize(), Error);
+  EXPECT_EQ(async->last_step().cycle, 2);
+  EXPECT_EQ(async->last_step().status, ErrorCode::invalid_operation);
 }
 
 TEST(AsyncRunner, SkipsStepsWhileTheWorkerIsBusyAndCountsThem) {
