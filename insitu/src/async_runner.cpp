@@ -29,20 +29,22 @@ AsyncRunner::~AsyncRunner() {
 }
 
 void AsyncRunner::publish_mesh(const MeshView& mesh) {
-  const Publication how = publication_of(mesh);
-  if (how == Publication::unchanged) {
-    m_moved_points.reset();  // back where the last step left them
+  std::vector<Vec3d> points;
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    points = std::move(m_spare_points);
+  }
+  const Publication how = publication_of(mesh, points);
+  if (how == Publication::moved) {
+    m_moved_points = std::move(points);
     return;
   }
-  if (how == Publication::moved) {
-    std::vector<Vec3d> points;
-    {
-      std::lock_guard<std::mutex> lock(m_mutex);
-      points = std::move(m_spare_points);
-    }
-    points.resize(mesh.point_count());
-    for (std::size_t i = 0; i < points.size(); ++i) points[i] = mesh.point(i);
-    m_moved_points = std::move(points);
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_spare_points = std::move(points);
+  }
+  if (how == Publication::unchanged) {
+    m_moved_points.reset();  // back where the last step left them
     return;
   }
   wait_idle();
@@ -57,7 +59,7 @@ void AsyncRunner::publish_mesh(const MeshView& mesh) {
   }
 }
 
-AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh) const {
+AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh, std::vector<Vec3d>& points) const {
   std::shared_ptr<const render::TetMesh> prepared;
   bool moving = false;  // a step in the worker's hands moves the points: "unchanged" is relative to that
   {
@@ -68,8 +70,11 @@ AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh) const
   if (!prepared || m_context->ranks().size() > 1 || mesh.ghost_cells) return Publication::here;
   if (mesh.topology_version != m_prepared_version || mesh.point_count() != prepared->points.size()) return Publication::here;
   bool moved = false;
+  points.resize(mesh.point_count());
+  // One pass: the copy taken while the points are compared with the prepared ones.
   for (std::size_t i = 0; i < mesh.point_count(); ++i) {
     const Vec3d p = mesh.point(i);
+    points[i] = p;
     // Coordinates the prepared mesh refuses (NaN, infinite) are refused here, at once.
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return Publication::here;
     moved = moved || !(p == prepared->points[i]);

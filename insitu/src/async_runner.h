@@ -75,9 +75,10 @@ private:
     std::optional<std::vector<Vec3d>> points;  ///< the mesh's points moved since the last step
   };
   /// How a mesh is published: prepared here with the worker idle, the prepared mesh as the last
-  /// step left it, or its points moved (handed to the worker with the next step).
+  /// step left it, or its points moved (handed to the worker with the next step, as copied into
+  /// `points` on the way).
   enum class Publication { here, unchanged, moved };
-  Publication publication_of(const MeshView& mesh) const;
+  Publication publication_of(const MeshView& mesh, std::vector<Vec3d>& points) const;
   /// The prepared mesh's counts and tets, after a publication here or a step the worker completed.
   void note_prepared_mesh();
   void run();
