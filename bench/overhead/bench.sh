@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: BSD-3-Clause
-# usage: overhead  (a stand-in solver on holeblock-100k and holeblock-1m with and without Penumbra, sync and async, unlit / light volume / occlusion, with and without a store, and a moving mesh: overhead %, what a rendering step's pnb_execute costs the solver beside one memcpy of what it reads)
+# usage: overhead  (the examples' solvers on holeblock-100k and holeblock-1m with and without Penumbra, sync and async, unlit / light volume / occlusion, with and without a store, and a moving mesh; then a step budget of one solver step and the adaptive cadence: overhead %, what a rendering step's pnb_execute and publications cost the solver beside one memcpy of what it reads, what the worker costs the solver's own steps, what budgeted steps gave up)
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $build and $data.
 # Environment: PNB_BENCH_OVERHEAD_SCENES (default "holeblock-100k holeblock-1m"),
 # PNB_BENCH_OVERHEAD_RUNS (alternated pairs per configuration, default 3), PNB_BENCH_OVERHEAD_STEPS
