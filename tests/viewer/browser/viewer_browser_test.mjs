@@ -173,6 +173,11 @@ try {
   await freeCamera();
 } catch (e) {
   check(false, "free camera session: " + e.message);
+}
+try {
+  await degradedColumn();
+} catch (e) {
+  check(false, "degraded column session: " + e.message);
 } finally {
   await browser.close();
 }
@@ -255,5 +260,34 @@ async function freeCamera() {
     viewer.child.kill("SIGTERM");
   }
 }
+// A run with a "budget" adds a `degraded` column: the example's database with one, its first row
+// degraded. The column gets no control; the page says what a shown image gave up, and nothing for
+// one that gave up nothing.
+async function degradedColumn() {
+  const db3 = path.join(outDir, "degraded-db");
+  fs.cpSync(db, db3, { recursive: true });
+  const table = fs.readFileSync(path.join(db3, "data.csv"), "utf8").trim().split("\n").filter((l) => l.split(",").length === header.length);
+  const withColumn = table.map((l, r) => {
+    const cells = l.split(",");
+    cells.splice(cells.length - 1, 0, r === 0 ? "degraded" : r === 1 ? "light+image:0.5" : "none");
+    return cells.join(",");
+  });
+  fs.writeFileSync(path.join(db3, "data.csv"), withColumn.join("\n") + "\n");
+  const viewer = await startViewer(db3);
+  try {
+    const page = await browser.newPage();
+    const firstRow = table[1].split(",");
+    await page.goto(viewer.url + "#time=" + firstRow[0] + "&phi=" + firstRow[1] + "&theta=" + firstRow[2]);
+    await waitUntil(page, () => !document.getElementById("annotation").hidden, null, "the degraded image's note");
+    check((await page.locator("#annotation").textContent()) === "degraded: light+image:0.5", "a degraded image says what it gave up");
+    check((await page.locator("#control-degraded").count()) === 0, "the degraded column gets no control");
+    await page.keyboard.press("ArrowRight");
+    await waitUntil(page, () => document.getElementById("annotation").hidden, null, "the next image, not degraded");
+    check(!new URL(page.url()).hash.includes("degraded"), "the degraded column is not part of the shared state");
+  } finally {
+    viewer.child.kill("SIGTERM");
+  }
+}
+
 console.log(failures === 0 ? "viewer browser test: ok" : "viewer browser test: " + failures + " failure(s)");
 process.exit(failures === 0 ? 0 : 1);
