@@ -52,6 +52,21 @@ std::map<std::string, std::string> files_under(const fs::path& dir) {
   return out;
 }
 
+// Every file under `sync` is under `async` with the same bytes, and no other; returns how many.
+std::size_t expect_same_files(const fs::path& sync, const fs::path& async) {
+  const auto sync_files = files_under(sync), async_files = files_under(async);
+  EXPECT_EQ(sync_files.size(), async_files.size());
+  for (const auto& [name, bytes] : sync_files) {
+    const auto it = async_files.find(name);
+    if (it == async_files.end()) {
+      ADD_FAILURE() << name << " is missing";
+      continue;
+    }
+    EXPECT_TRUE(it->second == bytes) << name << " differs";
+  }
+  return sync_files.size();
+}
+
 TEST(AsyncRunner, WritesWhatASynchronousRunWritesWhileTheSolverReusesItsArrays) {
   TempDir tmp;
   {
@@ -78,14 +93,7 @@ TEST(AsyncRunner, WritesWhatASynchronousRunWritesWhileTheSolverReusesItsArrays) 
     EXPECT_EQ(async.last_step().cycle, 8);
     EXPECT_EQ(async.skipped_steps(), 0);
   }
-  const auto sync_files = files_under(tmp / "sync"), async_files = files_under(tmp / "async");
-  EXPECT_EQ(sync_files.size(), async_files.size());
-  for (const auto& [name, bytes] : sync_files) {
-    const auto it = async_files.find(name);
-    ASSERT_NE(it, async_files.end()) << name;
-    EXPECT_TRUE(it->second == bytes) << name << " differs";
-  }
-  EXPECT_GT(sync_files.size(), 10u);
+  EXPECT_GT(expect_same_files(tmp / "sync", tmp / "async"), 10u);
 }
 
 // A mesh whose points move every step (and once back where they were, and once while the
@@ -126,13 +134,7 @@ TEST(AsyncRunner, AMovingMeshHandsItsPointsToTheWorkerAndWritesWhatASynchronousR
     }
     async.finalize();
   }
-  const auto sync_files = files_under(tmp / "sync"), async_files = files_under(tmp / "async");
-  EXPECT_EQ(sync_files.size(), async_files.size());
-  for (const auto& [name, bytes] : sync_files) {
-    const auto it = async_files.find(name);
-    ASSERT_NE(it, async_files.end()) << name;
-    EXPECT_TRUE(it->second == bytes) << name << " differs";
-  }
+  expect_same_files(tmp / "sync", tmp / "async");
 }
 
 TEST(AsyncRunner, AMotionThatInvertsACellIsTheNextCallsErrorAndTheRunGoesOn) {
