@@ -5,7 +5,8 @@
 // rays leave and re-enter it), then advects a hot blob around the hole while it diffuses, and
 // hands every step to Penumbra, which renders some of them into a Cinema database and keeps
 // their history compressed in OUTPUT_DIR/store, from which penumbra-view renders new views.
-// Usage: penumbra-example-advection [OUTPUT_DIR]   (default ./penumbra-example-db)
+// Usage: penumbra-example-advection [--async] [OUTPUT_DIR]   (default ./penumbra-example-db)
+// With --async the steps render on Penumbra's worker thread while the solver goes on.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -120,7 +121,7 @@ struct Solver {
   }
 };
 
-std::string config_json(const std::string& out) {
+std::string config_json(const std::string& out, bool async) {
   return R"({
     "output": {"directory": ")" + out + R"("},
     "image": {"width": 128, "height": 128, "background": [0.02, 0.02, 0.05]},
@@ -140,7 +141,9 @@ std::string config_json(const std::string& out) {
       "phong": {"ambient": 0.75, "diffuse": 0.35, "specular": 0.15}
     },
     "trigger": {"every_cycles": )" + std::to_string(kEvery) + R"(},
-    "store": {"directory": ")" + out + R"(/store", "every_cycles": )" + std::to_string(kEvery) + R"(, "window": 8}
+    "store": {"directory": ")" + out + R"(/store", "every_cycles": )" + std::to_string(kEvery) + R"(, "window": 8})" +
+         (async ? R"(,
+    "async": true)" : "") + R"(
   })";
 }
 
@@ -153,13 +156,20 @@ bool ok(pnb_context ctx, pnb_status s, const char* what) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string out = argc > 1 ? argv[1] : "penumbra-example-db";
+  bool async = false;
+  std::string out = "penumbra-example-db";
+  for (int a = 1; a < argc; ++a) {
+    if (std::string(argv[a]) == "--async")
+      async = true;
+    else
+      out = argv[a];
+  }
   const auto t_start = std::chrono::steady_clock::now();
   const Mesh mesh = build_mesh();
   Solver solver(mesh);
 
   pnb_context ctx = nullptr;
-  if (!ok(nullptr, pnb_create(config_json(out).c_str(), &ctx), "pnb_create")) return 1;
+  if (!ok(nullptr, pnb_create(config_json(out, async).c_str(), &ctx), "pnb_create")) return 1;
 
   pnb_mesh_desc desc PNB_MESH_DESC_INIT;
   desc.points = mesh.xyz.data();

@@ -10,8 +10,9 @@
  * flow speed are rendered every 8 cycles; every cycle is kept in a compressed history (one store
  * segment: the connectivity once, the coordinates and fields per step) that penumbra-replay renders
  * again with another config.
- * Usage: penumbra-example-lagrangian [OUTPUT_DIR [STORE_DIR]]
- *        (defaults ./penumbra-example-lagrangian-db and OUTPUT_DIR-history) */
+ * Usage: penumbra-example-lagrangian [--async] [OUTPUT_DIR [STORE_DIR]]
+ *        (defaults ./penumbra-example-lagrangian-db and OUTPUT_DIR-history); with --async the
+ *        steps render on Penumbra's worker thread while the vortex goes on, into the same files. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -63,7 +64,7 @@ static void make_cells(int64_t* hexes) {
       }
 }
 
-static pnb_context create(const char* out, const char* store) {
+static pnb_context create(const char* out, const char* store, int async) {
   char config[2048];
   pnb_context ctx = NULL;
   /* Fixed ranges: one colour scale for the whole run (the flow stops everywhere when the vortex
@@ -79,24 +80,34 @@ static pnb_context create(const char* out, const char* store) {
            "   {\"name\": \"speed\", \"range\": [0, 1.1], \"transfer_function\": {"
            "      \"colors\": [[0, 0.1, 0.3, 0.6], [1, 1, 0.9, 0.3]], \"opacities\": [[0, 0.3], [1, 6]]}}],"
            " \"trigger\": {\"every_cycles\": 8},"
-           " \"store\": {\"directory\": \"%s\", \"window\": 16, \"error_bound\": {\"relative\": 0.001}}}",
-           out, store);
+           " \"store\": {\"directory\": \"%s\", \"window\": 16, \"error_bound\": {\"relative\": 0.001}}%s}",
+           out, store, async ? ", \"async\": true" : "");
   if (!check(NULL, pnb_create(config, &ctx), "pnb_create")) return NULL;
   return ctx;
 }
 
 int main(int argc, char** argv) {
-  const char* out = argc > 1 ? argv[1] : "penumbra-example-lagrangian-db";
+  const char* positional[2] = {NULL, NULL};
+  const char* out;
   char store[1024];
   static double x0[NPTS], y0[NPTS], x[NPTS], y[NPTS], z[NPTS], temperature0[NPTS], temperature[NPTS], speed[NPTS];
   static int64_t hexes[NCELLS * 8];
   static const uint8_t hex_type = PNB_HEXAHEDRON;
   pnb_mesh_desc mesh = PNB_MESH_DESC_INIT;
   pnb_context ctx;
-  int i, j, k, cycle, failures = 0;
+  int i, j, k, cycle, failures = 0, async = 0, given = 0;
 
-  snprintf(store, sizeof store, "%s", argc > 2 ? argv[2] : "");
-  if (argc <= 2) snprintf(store, sizeof store, "%s-history", out);
+  for (i = 1; i < argc; ++i) {
+    if (strcmp(argv[i], "--async") == 0)
+      async = 1;
+    else if (given < 2)
+      positional[given++] = argv[i];
+  }
+  out = positional[0] ? positional[0] : "penumbra-example-lagrangian-db";
+  if (positional[1])
+    snprintf(store, sizeof store, "%s", positional[1]);
+  else
+    snprintf(store, sizeof store, "%s-history", out);
   for (k = 0; k <= NZ; ++k)
     for (j = 0; j <= NY; ++j)
       for (i = 0; i <= NX; ++i) {
@@ -108,7 +119,7 @@ int main(int argc, char** argv) {
         temperature0[p] = exp(-pow((y0[p] - 0.5) / 0.08, 2)) * (0.6 + 0.4 * x0[p]) + 0.15 * k / NZ;
       }
   make_cells(hexes);
-  ctx = create(out, store);
+  ctx = create(out, store, async);
   if (!ctx) return 1;
 
   mesh.points = NULL; /* the coordinates as three arrays, read in place */
