@@ -68,7 +68,10 @@ AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh, std::
     moving = m_job && m_job->points;
   }
   if (!prepared || m_context->ranks().size() > 1 || mesh.ghost_cells) return Publication::here;
-  if (mesh.topology_version != m_prepared_version || mesh.point_count() != prepared->points.size()) return Publication::here;
+  // Counts that differ under the same version are the preparation's error to report, here.
+  if (mesh.topology_version != m_prepared_version || mesh.point_count() != prepared->points.size() ||
+      mesh.cell_count() != m_context->prepared_cell_count())
+    return Publication::here;
   bool moved = false;
   points.resize(mesh.point_count());
   // One pass: the copy taken while the points are compared with the prepared ones.

@@ -219,6 +219,11 @@ pnb_status create_context(const char* call, const char* config, std::shared_ptr<
   const AsyncConfig& async = ctx->context->config().async;
   if (async.enabled && may_run_async(*group)) {
     const pnb_status started = guarded(nullptr, [&] { ctx->async = std::make_unique<AsyncRunner>(std::move(ctx->context), async.skip_when_busy); });
+    // A runner that failed to start on one rank fails the creation on every rank.
+    if (group->size() > 1) {
+      const auto failed = group->failures(started == PNB_OK ? 0 : static_cast<int>(started), t_last_error);
+      if (!failed.empty()) return record(nullptr, static_cast<pnb_status>(failed.front().code), ranks_text(failed, group->size()).c_str());
+    }
     if (started != PNB_OK) return started;
   }
   *out = ctx.release();

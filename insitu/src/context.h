@@ -141,6 +141,9 @@ public:
   MeshView moved_view(const std::vector<Vec3d>& points) const;
   /// The prepared tet mesh (null before the first mesh): immutable, so another thread may read it.
   std::shared_ptr<const render::TetMesh> prepared_tets() const;
+  /// The prepared mesh's cell count, from the topology the solver's thread may read while a
+  /// worker moves the points.
+  std::size_t prepared_cell_count() const { return m_topology.cell_count(); }
 
   /// publish_field's checks alone, storing nothing: false for a field the config does not use,
   /// Error for one it refuses.

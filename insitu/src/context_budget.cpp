@@ -47,13 +47,15 @@ double Context::budget_for_step(bool renders) {
 }
 
 std::optional<StepPlan> Context::plan_this_step(double budget_ms) {
-  if (budget_ms <= 0 || m_last_step.views == 0) return std::nullopt;
+  if (budget_ms <= 0) return std::nullopt;  // the same on every rank (budget_for_step)
   const bool light_volume = light_volume_model(m_config);
   StepCosts c = costs_of(m_last_step, light_volume);
-  // Every rank plans from the largest costs, so that all plan alike. Minimum of the negatives.
-  double v[7] = {-c.fixed_ms, -c.light_ms, -c.light_piece_ms, -c.render_ms_per_pixel, -c.image_ms,
-                 c.light_converged ? 1.0 : 0.0, -budget_ms};
-  m_group->minimum(v, 7);
+  // Every rank plans from the largest costs, so that all plan alike (minimum of the negatives),
+  // and only once every rank has measured a step: a rank whose last step failed early has not.
+  double v[8] = {-c.fixed_ms, -c.light_ms, -c.light_piece_ms, -c.render_ms_per_pixel, -c.image_ms,
+                 c.light_converged ? 1.0 : 0.0, -budget_ms, m_last_step.views > 0 ? 1.0 : 0.0};
+  m_group->minimum(v, 8);
+  if (v[7] == 0) return std::nullopt;
   c = {-v[0], -v[1], v[5] > 0, -v[2], -v[3], -v[4]};
   int level0 = 0, level0_now = 0;
   if (light_volume) {
@@ -86,7 +88,7 @@ render::LightBudget Context::light_budget() const {
   const double share = m_plan->light_ms / static_cast<double>(m_config.fields.size());
   if (m_group->size() > 1) {
     // Over ranks in whole pieces, the largest rank's, so that every rank does the same work.
-    const double piece = std::max(m_last_step.light_piece_ms, 1e-3);
+    const double piece = std::max(m_plan->light_piece_ms, 1e-3);
     const int units = std::max(1, static_cast<int>(share / piece));
     budget.max_work_units = budget.max_work_units < 0 ? units : std::min(budget.max_work_units, units);
   } else {

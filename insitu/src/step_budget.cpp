@@ -24,19 +24,21 @@ struct LightPlan {
 
 /// Steps 1 and 2: the light carried over (capped at what is left after the images), then level 0
 /// coarsened until a piece fits. A coarsened level 0 comes back up while twice its resolution
-/// fits whole. Solve costs go with the cube of the resolution.
+/// fits whole, judged by a measured level-0 solve (a converged light's small update says nothing
+/// of what a volume made again costs). Solve costs go with the cube of the resolution; a step
+/// that solved no level 0 (piece 0) gives no reason to coarsen it.
 LightPlan plan_light(double allow, const StepCosts& costs, int level0, int level0_now) {
   LightPlan p;
   p.level0 = level0_now;
   double need = costs.light_converged ? costs.light_ms : 2 * costs.light_ms;
   double piece = costs.light_piece_ms;
-  while (p.level0 < level0 && need * 8 <= allow) {
+  while (p.level0 < level0 && piece > 0 && std::max(need, piece) * 8 <= allow) {
     p.level0 = std::min(level0, 2 * p.level0);
     need *= 8;
     piece *= 8;
   }
   if (need <= allow) return p;
-  while (piece > allow && p.level0 > kMinLevel0) {
+  while (piece > 0 && piece > allow && p.level0 > kMinLevel0) {
     p.level0 = std::max(kMinLevel0, p.level0 / 2);
     need /= 8;
     piece /= 8;
@@ -66,6 +68,7 @@ std::string Degradation::text() const {
 StepPlan plan_step(double budget_ms, const StepCosts& costs, int cameras, int images_per_camera, std::size_t pixels,
                    int level0, int level0_now) {
   StepPlan plan;
+  plan.light_piece_ms = costs.light_piece_ms;
   Degradation& d = plan.degradation;
   d.cameras = d.cameras_configured = cameras;
   const double images = static_cast<double>(cameras) * images_per_camera;

@@ -49,7 +49,8 @@ struct StepCosts {
 /// What a step is to do, and what it gives up for it.
 struct StepPlan {
   Degradation degradation;
-  double light_ms = -1;  ///< the light's allowance; negative: as lighting.budget says
+  double light_ms = -1;        ///< the light's allowance; negative: as lighting.budget says
+  double light_piece_ms = 0;   ///< the piece it was planned with (costs.light_piece_ms)
 };
 
 /// Plans one step within `budget_ms` from `costs`. `images_per_camera` is the number of fields;

@@ -67,6 +67,18 @@ TEST(StepBudget, LevelZeroIsCoarsenedUntilAPieceFitsAndComesBackWhenThereIsRoom)
   EXPECT_EQ(plan_step(10 + 39 + 48, at64, 8, 1, 10000, 128, 64).degradation.level0_resolution, 64);
 }
 
+TEST(StepBudget, ALightThatSolvedNoLevelZeroKeepsItsResolution) {
+  // The last step's light converged without a level-0 solve (piece 0): coarsening level 0 would
+  // only throw the volume away. The images, over the budget alone, shrink instead.
+  StepCosts c = costs();
+  c.light_ms = 1;
+  c.light_piece_ms = 0;
+  const StepPlan p = plan_step(10 + 8 + 20, c, 8, 1, 10000, 128, 128);
+  EXPECT_EQ(p.degradation.level0_resolution, 0);
+  EXPECT_LT(p.degradation.image_scale, 1.0);
+  EXPECT_EQ(p.light_piece_ms, 0);
+}
+
 TEST(StepBudget, ImagesShrinkBeforeCamerasAreLeftOut) {
   // Level 0 at its floor of 16 (a piece of 5/512 ms); 8 x 1 ms of writing; half of the
   // ray casting's 40 ms left: a scale of sqrt(1/2), rounded down to 11/16.
