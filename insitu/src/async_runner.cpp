@@ -2,12 +2,9 @@
 // insitu/src/async_runner.cpp
 #include "async_runner.h"
 
-#include <chrono>
 #include <cmath>
 #include <exception>
 #include <utility>
-
-#include "penumbra/core/elapsed.h"
 
 namespace penumbra::insitu {
 
@@ -69,7 +66,7 @@ AsyncRunner::Publication AsyncRunner::publication_of(const MeshView& mesh, std::
   }
   if (!prepared || m_context->ranks().size() > 1 || mesh.ghost_cells) return Publication::here;
   // Counts that differ under the same version are the preparation's error to report, here.
-  if (mesh.topology_version != m_prepared_version || mesh.point_count() != prepared->points.size() ||
+  if (mesh.topology_version != prepared->topology_version || mesh.point_count() != prepared->points.size() ||
       mesh.cell_count() != m_context->prepared_cell_count())
     return Publication::here;
   bool moved = false;
@@ -90,7 +87,6 @@ void AsyncRunner::note_prepared_mesh() {
   std::shared_ptr<const render::TetMesh> tets = m_context->prepared_tets();
   std::lock_guard<std::mutex> lock(m_mutex);
   m_prepared = std::move(tets);
-  if (m_prepared) m_prepared_version = m_prepared->topology_version;
 }
 
 void AsyncRunner::publish_field(const FieldView& field, bool copy) {
@@ -109,11 +105,10 @@ StepNeeds AsyncRunner::step_needs(double time, std::int64_t cycle) const { retur
 
 bool AsyncRunner::execute(double time, std::int64_t cycle) {
   // The solver's time inside the call, for the adaptive cadence: what it waits, not the worker's.
-  struct Account {
-    Context& context;
-    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-    ~Account() { context.account_execute(ms_since(start)); }
-  } account{*m_context};
+  return m_context->accounted([&] { return hand_over(time, cycle); });
+}
+
+bool AsyncRunner::hand_over(double time, std::int64_t cycle) {
   struct ForgetBorrowed {
     std::map<std::string, FieldView>& fields;
     ~ForgetBorrowed() { fields.clear(); }
@@ -186,16 +181,17 @@ void AsyncRunner::run() {
     Job& job = *m_job;  // the solver's thread leaves it alone until it is reset
     lock.unlock();
     std::optional<Failure> failure;
+    const std::string where = " (cycle " + std::to_string(job.cycle) + ", rendered asynchronously)";
     try {
       if (job.points) m_context->publish_mesh(m_context->moved_view(*job.points));
       for (const FieldCopy& f : job.fields) m_context->publish_field(f.view, false);
       m_context->run_step(job.time, job.cycle, job.decision);
     } catch (const Error& e) {
-      failure = Failure{e.code(), e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)"};
+      failure = Failure{e.code(), e.what() + where};
     } catch (const std::bad_alloc&) {
-      failure = Failure{ErrorCode::out_of_memory, "out of memory (cycle " + std::to_string(job.cycle) + ", rendered asynchronously)"};
+      failure = Failure{ErrorCode::out_of_memory, "out of memory" + where};
     } catch (const std::exception& e) {
-      failure = Failure{ErrorCode::internal_error, e.what() + std::string(" (cycle ") + std::to_string(job.cycle) + ", rendered asynchronously)"};
+      failure = Failure{ErrorCode::internal_error, e.what() + where};
     }
     m_context->drop_borrowed_fields();
     const StepStats stats = m_context->last_step();

@@ -81,6 +81,8 @@ private:
   Publication publication_of(const MeshView& mesh, std::vector<Vec3d>& points) const;
   /// The prepared mesh's counts and tets, after a publication here or a step the worker completed.
   void note_prepared_mesh();
+  /// execute() without its accounting: the decision, and the hand-over to the worker.
+  bool hand_over(double time, std::int64_t cycle);
   void run();
   void wait_idle();
   bool busy();
@@ -96,7 +98,6 @@ private:
   std::int64_t m_skipped = 0;
   std::optional<std::vector<Vec3d>> m_moved_points;  ///< published, for the next step handed over
   std::shared_ptr<const render::TetMesh> m_prepared;  ///< the prepared mesh as the last step left it
-  std::uint64_t m_prepared_version = 0;
 
   mutable std::mutex m_mutex;
   std::condition_variable m_wake;

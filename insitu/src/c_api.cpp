@@ -176,6 +176,17 @@ penumbra::FieldView field_view(const pnb_field_desc& d) {
 
 }  // namespace
 
+namespace {
+
+/// `call` on what runs the context's steps: its asynchronous runner, or the context itself (both
+/// offer the same calls).
+template <class Call>
+decltype(auto) on_runner(pnb_context ctx, Call&& call) {
+  return ctx->async ? call(*ctx->async) : call(*ctx->context);
+}
+
+}  // namespace
+
 namespace penumbra::insitu {
 
 namespace {
@@ -255,8 +266,7 @@ pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_owne
     const pnb_mesh_desc d = penumbra::insitu::read_sized(*mesh, pnb_mesh_desc PNB_MESH_DESC_INIT, kFirstMeshDescBytes,
                                                          "pnb_publish_mesh", "pnb_mesh_desc", "PNB_MESH_DESC_INIT");
     // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
-    if (ctx->async) ctx->async->publish_mesh(mesh_view(d));
-    else ctx->context->publish_mesh(mesh_view(d));
+    on_runner(ctx, [&](auto& runner) { runner.publish_mesh(mesh_view(d)); });
   });
 }
 
@@ -267,17 +277,13 @@ pnb_status pnb_publish_field(pnb_context ctx, const pnb_field_desc* field, pnb_o
     penumbra::require(valid_ownership(own), "pnb_publish_field: own must be PNB_BORROW or PNB_COPY");
     const pnb_field_desc d = penumbra::insitu::read_sized(*field, pnb_field_desc PNB_FIELD_DESC_INIT, kFirstFieldDescBytes,
                                                           "pnb_publish_field", "pnb_field_desc", "PNB_FIELD_DESC_INIT");
-    if (ctx->async) ctx->async->publish_field(field_view(d), raw(own) == PNB_COPY);
-    else ctx->context->publish_field(field_view(d), raw(own) == PNB_COPY);
+    on_runner(ctx, [&](auto& runner) { runner.publish_field(field_view(d), raw(own) == PNB_COPY); });
   });
 }
 
 pnb_status pnb_execute(pnb_context ctx, double time, int64_t cycle) {
   if (!ctx) return null_context("pnb_execute");
-  return guarded(ctx, [&] {
-    if (ctx->async) ctx->async->execute(time, cycle);
-    else ctx->context->execute(time, cycle);
-  });
+  return guarded(ctx, [&] { on_runner(ctx, [&](auto& runner) { runner.execute(time, cycle); }); });
 }
 
 namespace {
@@ -293,7 +299,7 @@ pnb_status pnb_last_step(pnb_context ctx, pnb_step_stats* out) {
   if (!ctx) return null_context("pnb_last_step");
   return guarded(ctx, [&] {
     penumbra::require(out != nullptr, "pnb_last_step: out is NULL");
-    const penumbra::insitu::StepStats s = ctx->async ? ctx->async->last_step() : ctx->context->last_step();
+    const penumbra::insitu::StepStats s = on_runner(ctx, [](auto& runner) { return penumbra::insitu::StepStats(runner.last_step()); });
     pnb_step_stats stats PNB_STEP_STATS_INIT;
     stats.cycle = s.cycle;
     stats.images = s.images;
@@ -322,8 +328,7 @@ pnb_status pnb_step_needs(pnb_context ctx, double time, int64_t cycle, pnb_needs
   if (!ctx) return null_context("pnb_step_needs");
   return guarded(ctx, [&] {
     penumbra::require(out != nullptr, "pnb_step_needs: out is NULL");
-    const penumbra::insitu::StepNeeds needs =
-        ctx->async ? ctx->async->step_needs(time, cycle) : ctx->context->step_needs(time, cycle);
+    const penumbra::insitu::StepNeeds needs = on_runner(ctx, [&](auto& runner) { return runner.step_needs(time, cycle); });
     pnb_needs answer PNB_NEEDS_INIT;
     answer.renders = needs.renders ? 1 : 0;
     answer.stores = needs.stores ? 1 : 0;
@@ -341,10 +346,7 @@ const char* pnb_needed_field(pnb_context ctx, int index) {
 
 pnb_status pnb_finalize(pnb_context ctx) {
   if (!ctx) return null_context("pnb_finalize");
-  return guarded(ctx, [&] {
-    if (ctx->async) ctx->async->finalize();
-    else ctx->context->finalize();
-  });
+  return guarded(ctx, [&] { on_runner(ctx, [](auto& runner) { runner.finalize(); }); });
 }
 
 const char* pnb_last_error(pnb_context ctx) { return ctx ? ctx->last_error.c_str() : t_last_error.c_str(); }
@@ -352,8 +354,9 @@ const char* pnb_last_error(pnb_context ctx) { return ctx ? ctx->last_error.c_str
 void pnb_destroy(pnb_context ctx) {
   if (!ctx) return;
   guarded(ctx, [&] {
-    if (ctx->async && !ctx->async->finalized()) ctx->async->finalize();
-    if (ctx->context && !ctx->context->finalized()) ctx->context->finalize();
+    on_runner(ctx, [](auto& runner) {
+      if (!runner.finalized()) runner.finalize();
+    });
   });
   delete ctx;
 }

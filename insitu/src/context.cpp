@@ -659,16 +659,7 @@ bool Context::execute(double time, std::int64_t cycle) {
   std::map<std::string, FieldView> published;
   if (!m_trigger.watched_fields().empty())
     for (const auto& [name, held] : m_fields) published.emplace(name, held.view);
-  const auto t0 = Clock::now();
-  bool rendered = false;
-  try {
-    rendered = run_step(time, cycle, decide_step(time, cycle, published));
-  } catch (...) {
-    account_execute(ms_since(t0));
-    throw;
-  }
-  account_execute(ms_since(t0));
-  return rendered;
+  return accounted([&] { return run_step(time, cycle, decide_step(time, cycle, published)); });
 }
 
 void Context::account_execute(double inside_ms) {

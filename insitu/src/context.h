@@ -13,6 +13,7 @@
 #include "cinema_database.h"
 #include "config.h"
 #include "image_writer.h"
+#include "penumbra/core/elapsed.h"
 #include "penumbra/core/error.h"
 #include "penumbra/core/field_view.h"
 #include "penumbra/core/mesh_view.h"
@@ -124,6 +125,21 @@ public:
   /// largest (collective when max_share is set). execute() accounts its own; an asynchronous
   /// runner its.
   void account_execute(double inside_ms);
+  /// Runs one pnb_execute's `step` (returning whether it renders) and accounts the solver's time
+  /// inside it, whether it returns or throws.
+  template <class Step>
+  bool accounted(Step&& step) {
+    const auto t0 = std::chrono::steady_clock::now();
+    bool rendered = false;
+    try {
+      rendered = step();
+    } catch (...) {
+      account_execute(ms_since(t0));
+      throw;
+    }
+    account_execute(ms_since(t0));
+    return rendered;
+  }
   /// The last share account_execute found (0 without max_share).
   double execute_share() const { return m_share; }
 
