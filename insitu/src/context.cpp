@@ -107,6 +107,18 @@ void check_rank_rules(const Config& c) {
     refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
 }
 
+// Names the ranks whose time or cycle differs from rank 0's (collective: every rank that found
+// the least and greatest to differ calls it).
+std::string step_disagreement(RankGroup& group, double time, std::int64_t cycle) {
+  const std::vector<double> all = group.all_gather({time, static_cast<double>(cycle)});
+  std::string text = "pnb_execute: every rank must pass the same time and cycle;";
+  for (std::size_t r = 1; 2 * r + 1 < all.size(); ++r)
+    if (all[2 * r] != all[0] || all[2 * r + 1] != all[1])
+      text += " rank " + std::to_string(r) + " passed time " + format_number(all[2 * r]) + ", cycle " +
+              format_number(all[2 * r + 1]) + ";";
+  return text + " rank 0 passed time " + format_number(all[0]) + ", cycle " + format_number(all[1]);
+}
+
 }  // namespace
 
 std::string ranks_text(const std::vector<RankGroup::Failure>& failed, int ranks) {
@@ -641,10 +653,14 @@ std::optional<ComposedImage> Context::composite(RenderedView&& view) {
 
 bool Context::trigger_fires(double time, std::int64_t cycle) {
   const bool fires = m_trigger.fires(time, cycle);
-  // min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not.
-  double v[2] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0};
-  m_decisions->minimum(v, 2);
-  if (m_decisions->size() > 1 && v[0] == 0 && v[1] == 0)
+  // min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not; the least
+  // and greatest time and cycle differ when some rank passed others.
+  const auto c = static_cast<double>(cycle);
+  double v[6] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0, time, -time, c, -c};
+  m_decisions->minimum(v, 6);
+  if (m_decisions->size() == 1) return fires;
+  if (v[2] != -v[3] || v[4] != -v[5]) throw Error(ErrorCode::invalid_argument, step_disagreement(*m_decisions, time, cycle));
+  if (v[0] == 0 && v[1] == 0)
     throw Error(ErrorCode::invalid_operation, "pnb_execute: the ranks disagree whether cycle " + std::to_string(cycle) +
                                                   " renders: every rank must pass the same time and cycle");
   return fires;
