@@ -1,0 +1,26 @@
+# SPDX-License-Identifier: BSD-3-Clause
+# Runs the Fortran MPI mini-app on 1 rank and on 3 and checks that both wrote the same database:
+# the same cycles, every picture within RMS 0.1 % of 255 and 2 levels (the ranks' runs are
+# composited in float32), compared by COMPARE (penumbra_mpi_store_test compare).
+file(REMOVE_RECURSE ${OUT})
+foreach(ranks 1 3)
+  execute_process(COMMAND ${MPIEXEC} -n ${ranks} --allow-run-as-root --oversubscribe ${EXE} ${OUT}/np${ranks}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "fortran MPI example on ${ranks} rank(s) failed (${rc}): ${out} ${err}")
+  endif()
+  if(NOT out MATCHES "ranks: ${ranks}; last rendered step: cycle 10, 2 image")
+    message(FATAL_ERROR "pnb_last_step through the Fortran module over ${ranks} rank(s) reported: ${out}")
+  endif()
+  file(STRINGS ${OUT}/np${ranks}/data.csv rows)
+  list(LENGTH rows n)
+  # Steps 0, 5 and 10 with two cameras and one field, plus the header row.
+  if(NOT n EQUAL 7)
+    message(FATAL_ERROR "expected 7 lines in data.csv on ${ranks} rank(s), got ${n}: ${rows}")
+  endif()
+endforeach()
+execute_process(COMMAND ${COMPARE} compare ${OUT}/np1 ${OUT}/np3 0.1 2 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the databases of 1 and 3 ranks differ: ${out} ${err}")
+endif()
