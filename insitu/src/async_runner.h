@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -41,6 +42,8 @@ public:
   /// the prepared topology are copied and handed to the worker with the next step it takes, which
   /// moves the geometry there; their errors (a tet the motion inverted) are that step's.
   void publish_mesh(const MeshView& mesh);
+  /// Context::agree_arguments, on the solver's thread while the worker may run.
+  void agree_arguments(const char* call, const std::function<void()>& check) { m_context->agree_arguments(call, check); }
   /// Checked now (Context::check_field); borrowed fields are read by the next execute(), copied
   /// ones kept until replaced or the topology changes, as with a Context.
   void publish_field(const FieldView& field, bool copy);

@@ -261,12 +261,18 @@ pnb_status pnb_check_config(const char* config) {
 pnb_status pnb_publish_mesh(pnb_context ctx, const pnb_mesh_desc* mesh, pnb_ownership own) {
   if (!ctx) return null_context("pnb_publish_mesh");
   return guarded(ctx, [&] {
-    penumbra::require(mesh != nullptr, "pnb_publish_mesh: mesh is NULL");
-    penumbra::require(valid_ownership(own), "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
-    const pnb_mesh_desc d = penumbra::insitu::read_sized(*mesh, pnb_mesh_desc PNB_MESH_DESC_INIT, kFirstMeshDescBytes,
-                                                         "pnb_publish_mesh", "pnb_mesh_desc", "PNB_MESH_DESC_INIT");
-    // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
-    on_runner(ctx, [&](auto& runner) { runner.publish_mesh(mesh_view(d)); });
+    on_runner(ctx, [&](auto& runner) {
+      // Over ranks the call is collective: a descriptor refused on one rank is every rank's error.
+      penumbra::MeshView view;
+      runner.agree_arguments("pnb_publish_mesh", [&] {
+        penumbra::require(mesh != nullptr, "pnb_publish_mesh: mesh is NULL");
+        penumbra::require(valid_ownership(own), "pnb_publish_mesh: own must be PNB_BORROW or PNB_COPY");
+        view = mesh_view(penumbra::insitu::read_sized(*mesh, pnb_mesh_desc PNB_MESH_DESC_INIT, kFirstMeshDescBytes,
+                                                      "pnb_publish_mesh", "pnb_mesh_desc", "PNB_MESH_DESC_INIT"));
+      });
+      // Penumbra copies what it keeps of a mesh, so both ownership modes behave the same.
+      runner.publish_mesh(view);
+    });
   });
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -147,6 +148,11 @@ public:
   /// here on (collective), so that they may run on the solver's thread while run_step talks
   /// through the context's group on a worker's.
   void decide_on_own_group() { m_decisions = m_group->duplicate(); }
+  /// Runs `check` (a collective call's reading of its arguments, on the calling thread) and
+  /// agrees on it through the decisions' group, as a step's phases agree: when it threw on any
+  /// rank, every rank throws one Error naming each such rank, so that none goes on into the
+  /// call's collectives alone.
+  void agree_arguments(const char* call, const std::function<void()>& check) { agreed_on(*m_decisions, call, check); }
   /// Whether `mine` holds on any rank, through the decisions' group (collective): an
   /// asynchronous run skips a step on every rank when any rank's worker is still busy.
   bool on_any_rank(bool mine);

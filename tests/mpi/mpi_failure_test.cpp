@@ -7,6 +7,9 @@
 //                values): every rank's pnb_execute of step 0 fails naming rank 1; step 1 renders
 //         index  rank 1's mesh names a point past its points (the library throws inside): every
 //                rank's pnb_publish_mesh fails naming rank 1; the good mesh then renders
+//         empty  rank 1's mesh descriptor is refused before its contents are read (point_count
+//                0): every rank's pnb_publish_mesh fails naming rank 1 (none goes on alone into
+//                the call's collectives); the good mesh then renders
 //         time   rank 1 passes another time for step 0: every rank's pnb_execute fails naming
 //                rank 1 (the ranks disagree on the step); step 1 renders
 //         write  rank 1's files may not grow past 4 KiB (RLIMIT_FSIZE, as a full disk): its store's
@@ -100,6 +103,14 @@ bool bad_index(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   return succeeded(step(ctx, mesh, 0, 0, false), "step 0", rank) && good;
 }
 
+bool refused_descriptor(pnb_context ctx, const OwnedMesh& mesh, int rank) {
+  pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
+  if (rank == kFaultyRank) m.point_count = 0;
+  bool good = failed_naming_it(outcome(ctx, pnb_publish_mesh(ctx, &m, PNB_COPY)), "pnb_publish_mesh (point_count 0 on rank 1)", rank);
+  good = publish(ctx, mesh, rank) && good;
+  return succeeded(step(ctx, mesh, 0, 0, false), "step 0", rank) && good;
+}
+
 bool other_time(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   bool good = publish(ctx, mesh, rank);
   good = failed_naming_it(step(ctx, mesh, 0, rank == kFaultyRank ? 0.5 : 0, false), "step 0 (another time on rank 1)", rank) && good;
@@ -148,6 +159,7 @@ bool failed_write(pnb_context ctx, const OwnedMesh& mesh, int rank, const std::s
 bool run(pnb_context ctx, const std::string& kind, const OwnedMesh& mesh, int rank, const std::string& out) {
   if (kind == "nan") return nan_field(ctx, mesh, rank);
   if (kind == "index") return bad_index(ctx, mesh, rank);
+  if (kind == "empty") return refused_descriptor(ctx, mesh, rank);
   if (kind == "time") return other_time(ctx, mesh, rank);
   if (kind == "write") return failed_write(ctx, mesh, rank, out);
   std::fprintf(stderr, "unknown failure kind %s\n", kind.c_str());
@@ -162,7 +174,7 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   if (argc != 3 || ranks <= kFaultyRank) {
-    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|time|write\n", argv[0]);
+    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|write\n", argv[0]);
     MPI_Finalize();
     return 2;
   }
