@@ -4,7 +4,8 @@
 # composited in float32), compared by COMPARE (penumbra_mpi_store_test compare).
 file(REMOVE_RECURSE ${OUT})
 foreach(ranks 1 3)
-  execute_process(COMMAND ${MPIEXEC} -n ${ranks} --allow-run-as-root --oversubscribe ${EXE} ${OUT}/np${ranks}
+  # As root OpenMPI needs --allow-run-as-root; --oversubscribe runs 3 ranks on fewer cores.
+  execute_process(COMMAND ${MPIEXEC} ${NUMPROC_FLAG} ${ranks} --allow-run-as-root --oversubscribe ${EXE} ${OUT}/np${ranks}
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "fortran MPI example on ${ranks} rank(s) failed (${rc}): ${out} ${err}")

@@ -1,8 +1,8 @@
 ! SPDX-License-Identifier: BSD-3-Clause
 ! insitu/fortran/heat_fortran_mpi.f90 -- a Fortran caller over MPI ranks: each rank owns a slab of
 ! z layers of a hex grid (the points of the layers between slabs on both ranks) and publishes a
-! warm spot drifting through it; one image database, whatever the rank count.
-! Usage: mpirun -np N penumbra-example-fortran-mpi [OUTPUT_DIR]
+! warm spot drifting through it; one image database, whatever the rank count (1 to 12: each rank
+! owns at least one layer). Usage: mpirun -np N penumbra-example-fortran-mpi [OUTPUT_DIR]
 program heat_fortran_mpi
   use, intrinsic :: iso_c_binding
   use mpi
@@ -19,10 +19,16 @@ program heat_fortran_mpi
   type(pnb_field_desc) :: field
   type(pnb_step_stats) :: stats
   integer :: rank, ranks, ierr, k0, k1, np, nc, s
+  integer(c_int) :: status
 
   call MPI_Init(ierr)
   call MPI_Comm_rank(MPI_COMM_WORLD, rank, ierr)
   call MPI_Comm_size(MPI_COMM_WORLD, ranks, ierr)
+  if (ranks > n) then
+    if (rank == 0) print '(a,i0,a)', 'at most ', n, ' ranks: each owns at least one z layer'
+    call MPI_Finalize(ierr)
+    stop 1
+  end if
   outdir = 'penumbra-fortran-mpi-db'
   if (command_argument_count() >= 1) call get_command_argument(1, outdir)
 
@@ -61,16 +67,21 @@ program heat_fortran_mpi
   field%type = PNB_FLOAT64
   do s = 0, steps
     temp = exp(-40.0d0 * ((xyz(1, :) - 0.3d0 - 0.04d0 * s)**2 + (xyz(2, :) - 0.5d0)**2 + (xyz(3, :) - 0.5d0)**2))
-    call check(pnb_publish_field(ctx, field, PNB_BORROW))
+    ! Local: a field refused here fails the next pnb_execute on every rank, naming this one.
+    status = pnb_publish_field(ctx, field, PNB_BORROW)
     call check(pnb_execute(ctx, 0.01d0 * s, int(s, c_int64_t)))
   end do
-  call check(pnb_last_step(ctx, stats))
+  status = pnb_last_step(ctx, stats)
   if (rank == 0) print '(a,i0,a,i0,a,i0,a)', 'ranks: ', ranks, '; last rendered step: cycle ', stats%cycle, ', ', &
                         stats%images, ' image(s)'
-  call check(pnb_finalize(ctx))
+  ! Local: each rank flushes its own part; the ranks agree on the outcome before stopping alike.
+  status = pnb_finalize(ctx)
+  if (status /= PNB_OK) print '(a,i0,a,a)', 'rank ', rank, ': pnb_finalize: ', pnb_last_error_message(ctx)
+  call MPI_Allreduce(MPI_IN_PLACE, status, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD, ierr)
   call pnb_destroy(ctx)
-  if (rank == 0) print '(a)', 'wrote ' // trim(outdir)
+  if (rank == 0 .and. status == PNB_OK) print '(a)', 'wrote ' // trim(outdir)
   call MPI_Finalize(ierr)
+  if (status /= PNB_OK) stop 2
 
 contains
 
@@ -101,7 +112,7 @@ contains
     id = int(i + (n + 1) * (j + (n + 1) * (k - k0)), c_int32_t)   ! zero-based and local, as the C API expects
   end function
 
-  ! A failure is every rank's (the collective calls agree on it): each stops alike.
+  ! For the collective calls: a failure is every rank's (they agree on it), so each stops alike.
   subroutine check(st)
     integer(c_int), intent(in) :: st
     integer :: e

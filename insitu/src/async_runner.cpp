@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <exception>
+#include <new>
 #include <utility>
 
 namespace penumbra::insitu {
@@ -127,7 +128,18 @@ bool AsyncRunner::hand_over(double time, std::int64_t cycle) {
     handed_over = true;
     wait_idle();
     earlier = take_failure();
-    Job job{time, cycle, decision, copies_of(needs.fields, published), std::move(m_moved_points)};
+    Job job{time, cycle, decision, {}, std::move(m_moved_points)};
+    try {
+      job.fields = copies_of(needs.fields, published);
+    } catch (const std::exception& e) {
+      // This rank's worker still takes the step, so that it meets the other ranks' collectives:
+      // without its fields, and with the failure, which the step's report agrees on every rank.
+      job.fields.clear();
+      const bool memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
+      job.decision.failure += (job.decision.failure.empty() ? "" : "; ") + std::string("pnb_execute: copying the step's fields for the worker: ") +
+                              (memory ? "out of memory" : e.what());
+      job.decision.code = memory ? ErrorCode::out_of_memory : ErrorCode::internal_error;
+    }
     m_moved_points.reset();
     {
       std::lock_guard<std::mutex> lock(m_mutex);

@@ -107,16 +107,30 @@ void check_rank_rules(const Config& c) {
     refuse("lighting.occlusion.space \"image\" with shadows (use \"points\" or \"volume\")");
 }
 
+// A cycle as two 32-bit halves, each exact in a double, so that reductions compare it exactly.
+struct CycleHalves {
+  double high, low;
+};
+CycleHalves halves_of(std::int64_t cycle) {
+  const auto u = static_cast<std::uint64_t>(cycle);
+  return {static_cast<double>(u >> 32), static_cast<double>(u & 0xffffffffu)};
+}
+std::int64_t cycle_of(double high, double low) {
+  return static_cast<std::int64_t>((static_cast<std::uint64_t>(high) << 32) | static_cast<std::uint64_t>(low));
+}
+
 // Names the ranks whose time or cycle differs from rank 0's (collective: every rank that found
 // the least and greatest to differ calls it).
 std::string step_disagreement(RankGroup& group, double time, std::int64_t cycle) {
-  const std::vector<double> all = group.all_gather({time, static_cast<double>(cycle)});
+  const CycleHalves c = halves_of(cycle);
+  const std::vector<double> all = group.all_gather({time, c.high, c.low});
+  auto step_of = [&](std::size_t r) {
+    return "time " + format_number(all[3 * r]) + ", cycle " + std::to_string(cycle_of(all[3 * r + 1], all[3 * r + 2]));
+  };
   std::string text = "pnb_execute: every rank must pass the same time and cycle;";
-  for (std::size_t r = 1; 2 * r + 1 < all.size(); ++r)
-    if (all[2 * r] != all[0] || all[2 * r + 1] != all[1])
-      text += " rank " + std::to_string(r) + " passed time " + format_number(all[2 * r]) + ", cycle " +
-              format_number(all[2 * r + 1]) + ";";
-  return text + " rank 0 passed time " + format_number(all[0]) + ", cycle " + format_number(all[1]);
+  for (std::size_t r = 1; 3 * r + 2 < all.size(); ++r)
+    if (step_of(r) != step_of(0)) text += " rank " + std::to_string(r) + " passed " + step_of(r) + ";";
+  return text + " rank 0 passed " + step_of(0);
 }
 
 }  // namespace
@@ -652,18 +666,21 @@ std::optional<ComposedImage> Context::composite(RenderedView&& view) {
 }
 
 bool Context::trigger_fires(double time, std::int64_t cycle) {
-  const bool fires = m_trigger.fires(time, cycle);
-  // min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not; the least
-  // and greatest time and cycle differ when some rank passed others.
-  const auto c = static_cast<double>(cycle);
-  double v[6] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0, time, -time, c, -c};
-  m_decisions->minimum(v, 6);
-  if (m_decisions->size() == 1) return fires;
-  if (v[2] != -v[3] || v[4] != -v[5]) throw Error(ErrorCode::invalid_argument, step_disagreement(*m_decisions, time, cycle));
+  if (m_decisions->size() == 1) return m_trigger.fires(time, cycle);
+  // Asked first and recorded only once the ranks agree: a refused step leaves the time rule as it
+  // was. min(not fires) = 0 when some rank fires; min(fires) = 0 when some rank does not; the
+  // least and greatest time, and of each half of the cycle (exact in a double), differ when some
+  // rank passed others.
+  const bool fires = m_trigger.would_fire(time, cycle);
+  const CycleHalves c = halves_of(cycle);
+  double v[8] = {fires ? 0.0 : 1.0, fires ? 1.0 : 0.0, time, -time, c.high, -c.high, c.low, -c.low};
+  m_decisions->minimum(v, 8);
+  if (v[2] != -v[3] || v[4] != -v[5] || v[6] != -v[7])
+    throw Error(ErrorCode::invalid_argument, step_disagreement(*m_decisions, time, cycle));
   if (v[0] == 0 && v[1] == 0)
     throw Error(ErrorCode::invalid_operation, "pnb_execute: the ranks disagree whether cycle " + std::to_string(cycle) +
                                                   " renders: every rank must pass the same time and cycle");
-  return fires;
+  return m_trigger.fires(time, cycle);
 }
 
 bool Context::execute(double time, std::int64_t cycle) {

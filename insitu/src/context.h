@@ -151,8 +151,12 @@ public:
   /// Runs `check` (a collective call's reading of its arguments, on the calling thread) and
   /// agrees on it through the decisions' group, as a step's phases agree: when it threw on any
   /// rank, every rank throws one Error naming each such rank, so that none goes on into the
-  /// call's collectives alone.
-  void agree_arguments(const char* call, const std::function<void()>& check) { agreed_on(*m_decisions, call, check); }
+  /// call's collectives alone. A finalized context (finalized alike on every rank) refuses first,
+  /// with no collective.
+  void agree_arguments(const char* call, const std::function<void()>& check) {
+    require_open(call);
+    agreed_on(*m_decisions, call, check);
+  }
   /// Whether `mine` holds on any rank, through the decisions' group (collective): an
   /// asynchronous run skips a step on every rank when any rank's worker is still busy.
   bool on_any_rank(bool mine);

@@ -10,11 +10,14 @@
 //         empty  rank 1's mesh descriptor is refused before its contents are read (point_count
 //                0): every rank's pnb_publish_mesh fails naming rank 1 (none goes on alone into
 //                the call's collectives); the good mesh then renders
-//         time   rank 1 passes another time for step 0: every rank's pnb_execute fails naming
-//                rank 1 (the ranks disagree on the step); step 1 renders
+//         time   rank 1 passes another time (100) for step 0: every rank's pnb_execute fails
+//                naming rank 1 (the ranks disagree on the step); with "every_time": 1, steps 1
+//                and 2 then render on every rank (the refused step left the time rule as it was)
 //         write  rank 1's files may not grow past 4 KiB (RLIMIT_FSIZE, as a full disk): its store's
 //                writes fail; every rank's first failing call is the same one and names rank 1,
 //                the steps before it are in rank 0's database, and every later call returns
+//         cycle  rank 1 passes a cycle one above the others', past 2^53 (where doubles skip odd
+//                integers): every rank's pnb_execute fails naming rank 1 and its exact cycle
 // Each rank is killed by SIGALRM after 60 s (a hang fails the test before ctest's timeout does).
 // Exits 0 on every rank when every expectation holds on every rank, else 1.
 #include <mpi.h>
@@ -23,6 +26,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -47,7 +51,7 @@ std::string config(const std::string& out) {
       "image": {"width": 64, "height": 48}, "cameras": {"phi": [30], "theta": [20]},
       "fields": [{"name": "T", "range": [-2, 3],
                   "transfer_function": {"colors": [[0, 0.1, 0.2, 0.9], [1, 1, 0.2, 0.1]], "opacities": [[0, 1], [1, 10]]}}],
-      "store": {"directory": ")" + out + R"(/store", "window": 8}})";
+      "trigger": {"every_time": 1}, "store": {"directory": ")" + out + R"(/store", "window": 8}})";
 }
 
 // What one call returned on this rank: its status and, on failure, the message.
@@ -73,8 +77,20 @@ bool succeeded(const Outcome& o, const char* what, int rank) {
   return o.status == PNB_OK;
 }
 
-Outcome step(pnb_context ctx, const OwnedMesh& mesh, int cycle, double time, bool with_nan) {
-  auto values = penumbra::fixtures::sample(mesh, [cycle](double x, double y, double z) { return field_at(x, y, z, cycle); });
+// Whether the step of `cycle` succeeded and rendered: it is every rank's last rendered step, and
+// rank 0 (which writes the images) counts them.
+bool rendered(pnb_context ctx, const Outcome& o, std::int64_t cycle, int rank) {
+  pnb_step_stats stats = PNB_STEP_STATS_INIT;
+  const bool good = succeeded(o, "a step after the failure", rank) && pnb_last_step(ctx, &stats) == PNB_OK &&
+                    stats.cycle == cycle && (rank != 0 || stats.images > 0);
+  if (!good) std::fprintf(stderr, "rank %d: cycle %lld did not render (last rendered: cycle %lld, %d images)\n", rank,
+                          static_cast<long long>(cycle), static_cast<long long>(stats.cycle), static_cast<int>(stats.images));
+  return good;
+}
+
+Outcome step(pnb_context ctx, const OwnedMesh& mesh, std::int64_t cycle, double time, bool with_nan) {
+  const int phase = static_cast<int>(cycle % 16);
+  auto values = penumbra::fixtures::sample(mesh, [phase](double x, double y, double z) { return field_at(x, y, z, phase); });
   if (with_nan) values[values.size() / 2] = std::numeric_limits<double>::quiet_NaN();
   pnb_field_desc f = PNB_FIELD_DESC_INIT;
   f.name = "T", f.values = values.data(), f.count = static_cast<int64_t>(values.size());
@@ -91,7 +107,7 @@ bool publish(pnb_context ctx, const OwnedMesh& mesh, int rank) {
 bool nan_field(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   bool good = publish(ctx, mesh, rank);
   good = failed_naming_it(step(ctx, mesh, 0, 0, rank == kFaultyRank), "step 0 (a NaN on rank 1)", rank) && good;
-  return succeeded(step(ctx, mesh, 1, 1, false), "step 1", rank) && good;
+  return rendered(ctx, step(ctx, mesh, 1, 1, false), 1, rank) && good;
 }
 
 bool bad_index(pnb_context ctx, const OwnedMesh& mesh, int rank) {
@@ -100,7 +116,7 @@ bool bad_index(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(broken);
   bool good = failed_naming_it(outcome(ctx, pnb_publish_mesh(ctx, &m, PNB_COPY)), "pnb_publish_mesh (an index out of range on rank 1)", rank);
   good = publish(ctx, mesh, rank) && good;
-  return succeeded(step(ctx, mesh, 0, 0, false), "step 0", rank) && good;
+  return rendered(ctx, step(ctx, mesh, 0, 0, false), 0, rank) && good;
 }
 
 bool refused_descriptor(pnb_context ctx, const OwnedMesh& mesh, int rank) {
@@ -108,13 +124,26 @@ bool refused_descriptor(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   if (rank == kFaultyRank) m.point_count = 0;
   bool good = failed_naming_it(outcome(ctx, pnb_publish_mesh(ctx, &m, PNB_COPY)), "pnb_publish_mesh (point_count 0 on rank 1)", rank);
   good = publish(ctx, mesh, rank) && good;
-  return succeeded(step(ctx, mesh, 0, 0, false), "step 0", rank) && good;
+  return rendered(ctx, step(ctx, mesh, 0, 0, false), 0, rank) && good;
+}
+
+bool other_cycle(pnb_context ctx, const OwnedMesh& mesh, int rank) {
+  constexpr std::int64_t kBig = (std::int64_t{1} << 53) + 4;
+  bool good = publish(ctx, mesh, rank);
+  const Outcome o = step(ctx, mesh, rank == kFaultyRank ? kBig + 1 : kBig, 0, false);
+  good = failed_naming_it(o, "a step past 2^53 (another cycle on rank 1)", rank) && good;
+  if (o.message.find("rank 1 passed time 0, cycle " + std::to_string(kBig + 1)) == std::string::npos) {
+    std::fprintf(stderr, "rank %d: the message does not give rank 1's exact cycle: %s\n", rank, o.message.c_str());
+    good = false;
+  }
+  return rendered(ctx, step(ctx, mesh, kBig + 8, 1, false), kBig + 8, rank) && good;
 }
 
 bool other_time(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   bool good = publish(ctx, mesh, rank);
-  good = failed_naming_it(step(ctx, mesh, 0, rank == kFaultyRank ? 0.5 : 0, false), "step 0 (another time on rank 1)", rank) && good;
-  return succeeded(step(ctx, mesh, 1, 1, false), "step 1", rank) && good;
+  good = failed_naming_it(step(ctx, mesh, 0, rank == kFaultyRank ? 100 : 0, false), "step 0 (another time on rank 1)", rank) && good;
+  good = rendered(ctx, step(ctx, mesh, 1, 1, false), 1, rank) && good;
+  return rendered(ctx, step(ctx, mesh, 2, 2, false), 2, rank) && good;
 }
 
 // Steps on until rank 1's store fails to write; every rank's first failing call must be the same.
@@ -161,6 +190,7 @@ bool run(pnb_context ctx, const std::string& kind, const OwnedMesh& mesh, int ra
   if (kind == "index") return bad_index(ctx, mesh, rank);
   if (kind == "empty") return refused_descriptor(ctx, mesh, rank);
   if (kind == "time") return other_time(ctx, mesh, rank);
+  if (kind == "cycle") return other_cycle(ctx, mesh, rank);
   if (kind == "write") return failed_write(ctx, mesh, rank, out);
   std::fprintf(stderr, "unknown failure kind %s\n", kind.c_str());
   return false;
@@ -174,7 +204,7 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   if (argc != 3 || ranks <= kFaultyRank) {
-    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|write\n", argv[0]);
+    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|cycle|write\n", argv[0]);
     MPI_Finalize();
     return 2;
   }

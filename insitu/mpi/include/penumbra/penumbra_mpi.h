@@ -13,7 +13,10 @@
  * Collective (every rank of the communicator calls them, in the same order): pnb_create_mpi,
  * pnb_publish_mesh, pnb_execute and pnb_destroy. A failure on any rank (a wrong count, NaN, a
  * failed write, an index out of range, a time or cycle that differs from rank 0's) is returned by
- * every rank's call, its message naming the rank, and no rank is left waiting. pnb_publish_field, pnb_step_needs, pnb_last_step and pnb_last_error are local.
+ * every rank's call, its message naming the rank, and no rank is left waiting. pnb_publish_field,
+ * pnb_step_needs, pnb_last_step, pnb_last_error and pnb_finalize are local: pnb_finalize flushes
+ * this rank's store, and a write that fails there is this rank's status alone (call it on every
+ * rank and agree on the outcome, e.g. with MPI_Allreduce, before acting on it).
  * With "async" each rank's worker thread communicates through a duplicate of `comm`; that needs
  * MPI initialised at MPI_THREAD_MULTIPLE (MPI_Init_thread), and below it every step runs inside
  * pnb_execute, which rank 0 says once on stderr. Not over several ranks (refused at creation,
