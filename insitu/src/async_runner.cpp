@@ -147,7 +147,9 @@ bool AsyncRunner::hand_over(double time, std::int64_t cycle) {
     }
     m_wake.notify_all();
   }
-  if (!handed_over) earlier = take_failure();
+  // Over ranks a failure is taken only by a call that waited for the worker (a step handed over,
+  // or finalize), which is the same call on every rank; one rank's worker may finish sooner.
+  if (!handed_over && m_context->ranks().size() == 1) earlier = take_failure();
   if (earlier) throw *earlier;
   if (!work && !decision.failure.empty()) throw Error(decision.code, decision.failure);
   return handed_over && decision.renders;

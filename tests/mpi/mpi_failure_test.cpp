@@ -18,6 +18,11 @@
 //                the steps before it are in rank 0's database, and every later call returns
 //         cycle  rank 1 passes a cycle one above the others', past 2^53 (where doubles skip odd
 //                integers): every rank's pnb_execute fails naming rank 1 and its exact cycle
+//         async  with "async" (MPI_THREAD_MULTIPLE) and no store: rank 1 publishes no field at
+//                step 0, so the workers' step fails; steps at times 0, 0.5, 1, 1.5, 2 under
+//                "every_time": 1: the failure is every rank's status at the same call, the next
+//                step that renders (time 1), not at the step between (0.5) on the ranks whose
+//                workers finished sooner (rank 0 waits 0.3 s before it); step 4 renders
 // Each rank is killed by SIGALRM after 60 s (a hang fails the test before ctest's timeout does).
 // Exits 0 on every rank when every expectation holds on every rank, else 1.
 #include <mpi.h>
@@ -46,12 +51,13 @@ using penumbra::mpi_test::field_at;
 
 constexpr int kFaultyRank = 1;
 
-std::string config(const std::string& out) {
+std::string config(const std::string& out, bool async) {
+  const std::string keeps = async ? R"("async": true)" : R"("store": {"directory": ")" + out + R"(/store", "window": 8})";
   return R"({"output": {"directory": ")" + out + R"(/db"},
       "image": {"width": 64, "height": 48}, "cameras": {"phi": [30], "theta": [20]},
       "fields": [{"name": "T", "range": [-2, 3],
                   "transfer_function": {"colors": [[0, 0.1, 0.2, 0.9], [1, 1, 0.2, 0.1]], "opacities": [[0, 1], [1, 10]]}}],
-      "trigger": {"every_time": 1}, "store": {"directory": ")" + out + R"(/store", "window": 8}})";
+      "trigger": {"every_time": 1}, )" + keeps + "}";
 }
 
 // What one call returned on this rank: its status and, on failure, the message.
@@ -139,6 +145,20 @@ bool other_cycle(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   return rendered(ctx, step(ctx, mesh, kBig + 8, 1, false), kBig + 8, rank) && good;
 }
 
+bool async_failure(pnb_context ctx, const OwnedMesh& mesh, int rank) {
+  bool good = publish(ctx, mesh, rank);
+  const Outcome first = rank == kFaultyRank ? outcome(ctx, pnb_execute(ctx, 0, 0)) : step(ctx, mesh, 0, 0, false);
+  good = succeeded(first, "step 0 (handed to the worker)", rank) && good;
+  // Rank 0's worker has surely failed by its next call; the other ranks call at once.
+  if (rank == 0) usleep(300 * 1000);
+  const Outcome between = step(ctx, mesh, 1, 0.5, false);
+  good = succeeded(between, "step 1 at time 0.5 (renders nothing, waits for no worker)", rank) && good;
+  good = failed_naming_it(step(ctx, mesh, 2, 1, false), "step 2 (the workers' failure of step 0)", rank) && good;
+  good = succeeded(step(ctx, mesh, 3, 1.5, false), "step 3", rank) && good;
+  good = succeeded(step(ctx, mesh, 4, 2, false), "step 4", rank) && good;
+  return rendered(ctx, outcome(ctx, pnb_finalize(ctx)), 4, rank) && good;
+}
+
 bool other_time(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   bool good = publish(ctx, mesh, rank);
   good = failed_naming_it(step(ctx, mesh, 0, rank == kFaultyRank ? 100 : 0, false), "step 0 (another time on rank 1)", rank) && good;
@@ -191,6 +211,7 @@ bool run(pnb_context ctx, const std::string& kind, const OwnedMesh& mesh, int ra
   if (kind == "empty") return refused_descriptor(ctx, mesh, rank);
   if (kind == "time") return other_time(ctx, mesh, rank);
   if (kind == "cycle") return other_cycle(ctx, mesh, rank);
+  if (kind == "async") return async_failure(ctx, mesh, rank);
   if (kind == "write") return failed_write(ctx, mesh, rank, out);
   std::fprintf(stderr, "unknown failure kind %s\n", kind.c_str());
   return false;
@@ -199,12 +220,14 @@ bool run(pnb_context ctx, const std::string& kind, const OwnedMesh& mesh, int ra
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  const bool async = argc == 3 && std::string(argv[2]) == "async";
+  int provided = MPI_THREAD_SINGLE;
+  MPI_Init_thread(&argc, &argv, async ? MPI_THREAD_MULTIPLE : MPI_THREAD_SINGLE, &provided);
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-  if (argc != 3 || ranks <= kFaultyRank) {
-    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|cycle|write\n", argv[0]);
+  if (argc != 3 || ranks <= kFaultyRank || (async && provided != MPI_THREAD_MULTIPLE)) {
+    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|cycle|write|async\n", argv[0]);
     MPI_Finalize();
     return 2;
   }
@@ -214,7 +237,7 @@ int main(int argc, char** argv) {
   MPI_Barrier(MPI_COMM_WORLD);
   const auto part = penumbra::mpi_test::partition(penumbra::fixtures::tet_block_with_hole(6), "slabs", rank, ranks, false);
   pnb_context ctx = nullptr;
-  int good = succeeded(outcome(nullptr, pnb_create_mpi(config(out).c_str(), MPI_COMM_WORLD, &ctx)), "pnb_create_mpi", rank) ? 1 : 0;
+  int good = succeeded(outcome(nullptr, pnb_create_mpi(config(out, async).c_str(), MPI_COMM_WORLD, &ctx)), "pnb_create_mpi", rank) ? 1 : 0;
   if (ctx) {
     good = run(ctx, kind, part.mesh, rank, out) ? good : 0;
     pnb_destroy(ctx);

@@ -17,7 +17,9 @@
  * pnb_step_needs, pnb_last_step, pnb_last_error and pnb_finalize are local: pnb_finalize flushes
  * this rank's store, and a write that fails there is this rank's status alone (call it on every
  * rank and agree on the outcome, e.g. with MPI_Allreduce, before acting on it).
- * With "async" each rank's worker thread communicates through a duplicate of `comm`; that needs
+ * With "async" each rank's worker thread communicates through a duplicate of `comm` (a step's
+ * failure is then every rank's status at the next pnb_execute that renders or stores, or at
+ * pnb_finalize: the same call on every rank); that needs
  * MPI initialised at MPI_THREAD_MULTIPLE (MPI_Init_thread), and below it every step runs inside
  * pnb_execute, which rank 0 says once on stderr. Not over several ranks (refused at creation,
  * naming the key): lighting.occlusion.space "image" with shadows. */
