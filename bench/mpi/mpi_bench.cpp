@@ -11,7 +11,12 @@
 //   composite_ms     median compositing (the runs' exchange by image band, the merge in depth
 //                    order, the gather to rank 0), slowest rank
 //   bytes_per_rank   bytes each rank sends and receives in the exchange (runs 24 B, 8 B per pixel
-//                    that has runs; mean over ranks) and bytes_per_rank_max
+//                    that has runs; median over ranks) and bytes_per_rank_max
+//   messages_per_rank   point-to-point messages each rank sends and receives in the exchange
+//                    besides the MPI_Alltoall of the counts: two (places, runs) per other rank
+//                    whose band its runs reach or whose runs reach its band (median over ranks;
+//                    messages_per_rank_max), against 4 (P − 1) for an MPI_Alltoallv that sends
+//                    every pair a message, empty or not
 //   runs_per_pixel   runs over every rank per image pixel; runs_mb_max the largest rank's runs,
 //                    runs_peak_mb_max what they hold at their peak (28 B per pixel, 48 B per run:
 //                    the per-pixel lists and the flat copy), which --runs-memory-mb bounds (default
@@ -144,9 +149,13 @@ std::shared_ptr<const pr::TetMesh> prepare(const std::vector<double>& xyz, const
   return std::make_shared<const pr::TetMesh>(pr::prepare_tet_mesh(v, "pnb_bench_mpi"));
 }
 
-// The bytes this rank sends to and receives from the others in one composite of `runs`: for each
-// other rank's band, its runs (24 B) and, per pixel that has runs, its place and count (8 B).
-double exchanged_bytes(const pr::RayRuns& runs, int width, int height, int rank, int ranks) {
+// What this rank sends to and receives from the others in one composite of `runs`: for each other
+// rank's band, its runs (24 B) and, per pixel that has runs, its place and count (8 B); and the
+// messages that carry them, two per rank and direction with anything to carry.
+struct Exchanged {
+  double bytes = 0, messages = 0;
+};
+Exchanged exchanged(const pr::RayRuns& runs, int width, int height, int rank, int ranks) {
   auto band = [&](int b) { return static_cast<std::size_t>(static_cast<long long>(height) * b / ranks) * static_cast<std::size_t>(width); };
   std::vector<double> sent(static_cast<std::size_t>(ranks), 0.0), received(static_cast<std::size_t>(ranks), 0.0);
   for (int b = 0; b < ranks; ++b) {
@@ -156,8 +165,11 @@ double exchanged_bytes(const pr::RayRuns& runs, int width, int height, int rank,
     sent[static_cast<std::size_t>(b)] = 24.0 * (runs.offsets[band(b + 1)] - runs.offsets[band(b)]) + 8.0 * covered;
   }
   MPI_Alltoall(sent.data(), 1, MPI_DOUBLE, received.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
-  double total = 0;
-  for (int r = 0; r < ranks; ++r) total += sent[static_cast<std::size_t>(r)] + received[static_cast<std::size_t>(r)];
+  Exchanged total;
+  for (std::size_t r = 0; r < static_cast<std::size_t>(ranks); ++r) {
+    total.bytes += sent[r] + received[r];
+    total.messages += (sent[r] > 0 ? 2 : 0) + (received[r] > 0 ? 2 : 0);
+  }
   return total;
 }
 
@@ -454,7 +466,8 @@ int run(int argc, char** argv) {
         double runs_total = 0;
         MPI_Reduce(&runs_here, &runs_total, 1, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
         const Stats render_s = over_ranks(pb::median(render)), composite_s = over_ranks(pb::median(composite));
-        const Stats bytes = over_ranks(exchanged_bytes(out.runs, side, side, rank, ranks));
+        const Exchanged moved = exchanged(out.runs, side, side, rank, ranks);
+        const Stats bytes = over_ranks(moved.bytes), messages = over_ranks(moved.messages);
         const Stats runs_mb = over_ranks(runs_here * sizeof(pr::RayRun) / (1 << 20));
         const Stats runs_peak_mb = over_ranks(runs_peak_bytes(side * side, runs_here) / (1 << 20));
         const Stats light_s = over_ranks(light.solve_ms), merge_s = over_ranks(light.merge_ms),
@@ -475,6 +488,8 @@ int run(int argc, char** argv) {
         line["composite_ms"] = pb::rounded(composite_s.max, 1);
         line["bytes_per_rank"] = pb::rounded(bytes.median, 0);
         line["bytes_per_rank_max"] = pb::rounded(bytes.max, 0);
+        line["messages_per_rank"] = pb::rounded(messages.median, 1);
+        line["messages_per_rank_max"] = messages.max;
         line["runs_per_pixel"] = pb::rounded(runs_total / (static_cast<double>(side) * side), 3);
         line["runs_mb_max"] = pb::rounded(runs_mb.max, 1);
         line["runs_peak_mb_max"] = pb::rounded(runs_peak_mb.max, 1);

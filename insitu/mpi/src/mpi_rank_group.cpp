@@ -9,6 +9,7 @@
 
 #include "penumbra/core/error.h"
 #include "run_compositing.h"
+#include "sparse_exchange.h"
 
 namespace penumbra::insitu {
 
@@ -140,9 +141,10 @@ std::vector<std::vector<double>> MpiRankGroup::exchange(const std::vector<std::v
   for (std::size_t r = 0, at = 0; r < ranks; at += static_cast<std::size_t>(recv_counts[r]), ++r)
     recv_offsets[r] = static_cast<int>(at);
   std::vector<double> received(total);
-  check_mpi(MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_DOUBLE, received.data(),
-                          recv_counts.data(), recv_offsets.data(), MPI_DOUBLE, m_comm),
-            "MPI_Alltoallv");
+  // Ranks exchange with the few that share their points, not with every rank.
+  constexpr int kExchangeTag = 7103;
+  sparse_alltoallv(sent.data(), send_counts.data(), send_offsets.data(), received.data(), recv_counts.data(), recv_offsets.data(),
+                   MPI_DOUBLE, m_comm, kExchangeTag);
   std::vector<std::vector<double>> from_each(ranks);
   for (std::size_t r = 0; r < ranks; ++r)
     from_each[r].assign(received.begin() + recv_offsets[r], received.begin() + recv_offsets[r] + recv_counts[r]);

@@ -8,9 +8,13 @@
 
 #include "mpi_rank_group.h"
 #include "penumbra/core/error.h"
+#include "sparse_exchange.h"
 
 namespace penumbra::insitu {
 namespace {
+
+// Tags of the point-to-point messages of one composite, on the group's own communicator.
+constexpr int kPairsTag = 7101, kRunsTag = 7102;
 
 // The first pixel of band `b` of `ranks` bands of whole rows.
 std::size_t band_begin(int b, int ranks, int width, int height) {
@@ -94,15 +98,14 @@ render::Image composite_runs(MPI_Comm comm, const render::RayRuns& runs, int wid
     total_pairs += static_cast<std::size_t>(recv_pairs[s]);
     total_runs += static_cast<std::size_t>(recv_runs[s]);
   }
+  // Only to and from the ranks whose bands this rank's runs reach, and that reach its band.
   std::vector<std::uint32_t> got_pairs(total_pairs);
-  check_mpi(MPI_Alltoallv(pairs.data(), send_pairs.data(), pairs_at.data(), MPI_UINT32_T, got_pairs.data(), recv_pairs.data(),
-                          recv_pairs_at.data(), MPI_UINT32_T, comm),
-            "MPI_Alltoallv of the covered pixels");
+  sparse_alltoallv(pairs.data(), send_pairs.data(), pairs_at.data(), got_pairs.data(), recv_pairs.data(), recv_pairs_at.data(),
+                   MPI_UINT32_T, comm, kPairsTag);
   std::vector<render::RayRun> got(total_runs);
   const RunType run_type;
-  check_mpi(MPI_Alltoallv(runs.runs.data(), send_runs.data(), send_at.data(), run_type.type, got.data(), recv_runs.data(),
-                          recv_at.data(), run_type.type, comm),
-            "MPI_Alltoallv of runs");
+  sparse_alltoallv(runs.runs.data(), send_runs.data(), send_at.data(), got.data(), recv_runs.data(), recv_at.data(), run_type.type,
+                   comm, kRunsTag);
 
   // This rank's band: each pixel's runs from every rank, in depth order, composited. A pixel whose
   // runs all come from one rank takes them as they are (a rank's runs are front to back already);

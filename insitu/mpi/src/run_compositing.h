@@ -9,9 +9,10 @@
 namespace penumbra::insitu {
 
 /// Merges every rank's runs of one view (direct send): the image's rows are cut into one band per
-/// rank; each rank sends each other rank its runs in that rank's band (runs already lie in pixel
-/// order, so a band's are one contiguous stretch) and, for the pixels that have runs only, their
-/// place and run count; it puts the runs of each pixel of its own band in depth order and
+/// rank; after an MPI_Alltoall of the counts, each rank sends each rank whose band its runs reach
+/// (and no other: sparse_alltoallv) its runs in that band (runs already lie in pixel order, so a
+/// band's are one contiguous stretch) and, for the pixels that have runs only, their place and
+/// run count; it puts the runs of each pixel of its own band in depth order and
 /// composites them front to back ("over", premultiplied colour); rank 0 gathers the bands. Exact on any partition: runs of different ranks never overlap in depth, so their
 /// order along a ray is the order of their entries. Returns the image on rank 0 and an empty one
 /// elsewhere. Collective over `comm`.
