@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: BSD-3-Clause
-# usage: mpi     (sort-last compositing of ray runs over 1/2/4 MPI ranks on holeblock-1m cut into slabs, METIS parts and round-robin cells, unlit, Phong and with the light volume: render and composite ms, bytes per rank, runs per pixel and their peak memory, light solve ms, error against one process)
+# usage: mpi     (sort-last compositing of ray runs over 1/2/4 MPI ranks on holeblock-1m cut into slabs, METIS parts and round-robin cells, unlit, Phong and with the light volume: render and composite ms, bytes and messages per rank, runs per pixel and their peak memory, light solve ms, error against one process)
 # Sourced by bench/run.sh, which provides build_targets, log, holeblock_mesh, $root, $build, $data and
 # $frames. Environment: PNB_BENCH_MPI_SCENE (holeblock-1m, the default), PNB_BENCH_MPI_RANKS
 # (default "1 2 4"), PNB_BENCH_MPI_PARTITIONS (default "slabs metis round-robin"),
