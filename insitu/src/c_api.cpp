@@ -124,8 +124,12 @@ penumbra::MeshView mesh_view(const pnb_mesh_desc& d) {
   const std::string who = "pnb_publish_mesh: ";
   require(is_float(d.point_type), who + "point_type must be PNB_FLOAT32 or PNB_FLOAT64, got " + std::to_string(raw(d.point_type)));
   require(is_index(d.index_type), who + "index_type must be PNB_INT32 or PNB_INT64, got " + std::to_string(raw(d.index_type)));
-  require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
   penumbra::MeshView v;
+  v.topology_version = d.topology_version;
+  // No point, no cell: a rank that holds none of the rendered region (the context decides whether
+  // its run allows one).
+  if (d.point_count == 0 && d.connectivity_count == 0 && d.cell_types_count == 0) return v;
+  require(d.point_count > 0, who + "point_count must be > 0, got " + std::to_string(d.point_count));
   set_points(d, who, v);
   require(d.connectivity_count > 0, who + "connectivity_count must be > 0, got " + std::to_string(d.connectivity_count));
   require(d.connectivity != nullptr, who + "connectivity is NULL");

@@ -202,6 +202,7 @@ void Context::publish_mesh(const MeshView& mesh) {
   if (unchanged == 1) return;
   if (!update.tets) update.tets = *m_mesh->tets;  // this rank's points stayed; the shared frame may not
   const Bounds global = global_bounds(*m_group, update.tets->bounds);
+  if (global.empty()) throw Error(ErrorCode::invalid_argument, "pnb_publish_mesh: no rank published a cell");
   update.tets->frame = LocalFrame::of(global);
   const bool new_segment = store_segment_everywhere(update.kind == MeshUpdate::Kind::fresh);
   agreed("pnb_publish_mesh", [&] { apply_mesh_update(mesh, std::move(update), global, new_segment); });
@@ -221,6 +222,11 @@ namespace {
 // The tets of the cells this rank renders: all, or those that are not ghosts (the ghosts still
 // count for the cell fields' averages at the points, so the whole mesh is validated).
 render::TetMesh prepare_own_cells(const MeshView& mesh) {
+  if (mesh.point_count() == 0) {  // a part with no cell: nothing to prepare, nothing drawn
+    render::TetMesh none;
+    none.topology_version = mesh.topology_version;
+    return none;
+  }
   if (!mesh.ghost_cells) return render::prepare_tet_mesh(mesh, "pnb_publish_mesh");
   validate_mesh(mesh, "pnb_publish_mesh");
   const OwnCells own = without_ghosts(mesh);
@@ -230,8 +236,21 @@ render::TetMesh prepare_own_cells(const MeshView& mesh) {
 
 }  // namespace
 
+void Context::require_cells_or_allowed_none(const MeshView& mesh) const {
+  if (mesh.point_count() > 0) return;
+  const std::string none = "pnb_publish_mesh: this part has no cell (point_count, connectivity_count and cell_types_count 0)";
+  require(m_group->size() > 1, none + "; a part without cells is for one rank of a run over several ranks");
+  // Its light, occlusion and history would need an empty volume, grid and store part.
+  const bool lit = m_config.lighting && (m_config.lighting->occlusion_model || m_config.lighting->model == render::LightingModel::light_volume);
+  require(!lit, none + ", which a run lit by the light volume or occlusion does not take yet (\"none\" and \"phong\" do); "
+                       "create the context on a communicator without this rank (MPI_Comm_split)");
+  require(!m_config.store, none + ", which a run with a store does not take yet; create the context on a communicator "
+                                  "without this rank (MPI_Comm_split)");
+}
+
 Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {
   using Kind = MeshUpdate::Kind;
+  require_cells_or_allowed_none(mesh);
   if (!m_mesh || m_mesh->view.topology_version != mesh.topology_version) return {Kind::fresh, prepare_own_cells(mesh)};
   // Same topology. Counts are compared because they cost nothing and catch a solver that changed
   // its mesh but forgot to bump the version.
@@ -382,7 +401,7 @@ bool Context::check_field(const FieldView& field) const {
   require(field.values.count == expected,
           who + " has " + std::to_string(field.values.count) + " values but the mesh has " + std::to_string(expected) +
               (field.association == Association::point ? " points" : " cells"));
-  require(field.values.data != nullptr, who + ": values pointer is null");
+  require(field.values.count == 0 || field.values.data != nullptr, who + ": values pointer is null");
   const std::size_t item = scalar_size(field.type) * static_cast<std::size_t>(field.components);
   require(field.values.stride_bytes >= static_cast<std::ptrdiff_t>(item),
           who + ": stride_bytes " + std::to_string(field.values.stride_bytes) + " is smaller than one item (" +

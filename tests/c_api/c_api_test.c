@@ -158,6 +158,9 @@ static void test_mesh_errors(pnb_context ctx) {
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "points is NULL", "NULL points");
   m = good_mesh(); m.point_count = 0;
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "point_count must be > 0", "zero points");
+  m = good_mesh(); m.point_count = 0; m.connectivity_count = 0; m.cell_types_count = 0;
+  bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "a part without cells is for one rank of a run over several ranks",
+           "no cell in one process");
   m = good_mesh(); m.point_count = -5;
   bad_mesh(ctx, m, PNB_INVALID_ARGUMENT, "point_count must be > 0, got -5", "negative point count");
   m = good_mesh(); m.point_stride_bytes = 8;

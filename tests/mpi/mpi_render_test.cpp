@@ -13,6 +13,8 @@
 //              the views need: every rank's step fails naming a rank);  BACKEND cpu | gpu
 //   fail=RANK  that rank publishes a field of the wrong size at the first step: every rank's
 //              pnb_execute must fail naming it, and the next step must render.
+//   empty=RANK that rank publishes no cell and no point (a rank that holds none of the rendered
+//              region); the others share the whole mesh as RANKS - 1 parts
 //   ghosts     each rank also publishes, as ghost cells (vtkGhostType), the cells of other ranks
 //              that share a point with its own, and a cell field C is rendered too: averaged at the
 //              points over the ghosts as well, it matches the one-process average at partition
@@ -72,6 +74,14 @@ std::string config(const std::string& dir, const std::string& lighting, const st
          std::string(lighting == "scattering" ? R"( "scattering": [0.5, 1, 2],)" : "") + R"(
                            "lights": [{"type": "directional", "direction": [-0.6, 0.3, -1]}]})";
   return c + "}";
+}
+
+// This rank's part: its share of the whole mesh, or none on `empty_rank`, whose share the other
+// ranks split among themselves.
+Part part_of(const OwnedMesh& whole, const std::string& kind, int rank, int ranks, bool ghosts, int empty_rank) {
+  if (empty_rank < 0) return partition(whole, kind, rank, ranks, ghosts);
+  if (rank == empty_rank) return Part{};
+  return partition(whole, kind, rank < empty_rank ? rank : rank - 1, ranks - 1, ghosts);
 }
 
 bool ok(pnb_context ctx, pnb_status s, const char* what, int rank) {
@@ -395,11 +405,12 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string out = argv[1], kind = argv[2], lighting = argv[3], backend = argv[4];
-  int fail_rank = -1;
+  int fail_rank = -1, empty_rank = -1;
   bool ghosts = false;
   for (int a = 5; a < argc; ++a) {
     const std::string option = argv[a];
     if (option.rfind("fail=", 0) == 0) fail_rank = std::atoi(option.c_str() + 5);
+    if (option.rfind("empty=", 0) == 0) empty_rank = std::atoi(option.c_str() + 6);
     ghosts = ghosts || option == "ghosts";
   }
   const bool fail = fail_rank >= 0;
@@ -426,7 +437,7 @@ int main(int argc, char** argv) {
     good = 0;
   }
   if (ctx) {
-    good = run(ctx, partition(whole, kind, rank, ranks, ghosts), rank, fail, fail_rank) ? good : 0;
+    good = run(ctx, part_of(whole, kind, rank, ranks, ghosts, empty_rank), rank, fail, fail_rank) ? good : 0;
     pnb_destroy(ctx);
   }
   if (rank == 0) {

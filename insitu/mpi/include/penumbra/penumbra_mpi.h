@@ -2,13 +2,16 @@
 /* insitu/mpi/include/penumbra/penumbra_mpi.h -- Penumbra over the ranks of an MPI communicator.
  *
  * Link Penumbra::mpi (libpenumbra_mpi) instead of Penumbra::insitu: it holds every function of
- * penumbra.h and these. Each rank publishes its own partition: its cells (at least one of its
- * own) and the points they use (points on partition boundaries appear on every rank that uses
- * them), its fields on those points or cells; ranks that hold none of the rendered region create
- * the context on a communicator without them (e.g. from MPI_Comm_split). Each rank ray casts its
- * own cells; the runs where each ray is inside a rank's cells are exchanged by image region
- * through MPI, merged in depth order and composited, so the picture is that of the whole mesh
- * rendered in one process, whatever the partition. Rank 0 writes the image database.
+ * penumbra.h and these. Each rank publishes its own partition: its cells and the points they use
+ * (points on partition boundaries appear on every rank that uses them), its fields on those
+ * points or cells. A rank that holds none of the rendered region publishes a mesh with
+ * point_count, connectivity_count and cell_types_count 0 (and fields of count 0) in an unlit or
+ * Phong-lit run without a store; a run with the light volume, occlusion or a store refuses such
+ * a part on every rank, naming it: create that context on a communicator without those ranks
+ * (e.g. from MPI_Comm_split). Each rank ray casts its own cells; the runs where each ray is
+ * inside a rank's cells are exchanged by image region through MPI, merged in depth order and
+ * composited, so the picture is that of the whole mesh rendered in one process, whatever the
+ * partition. Rank 0 writes the image database.
  *
  * Collective (every rank of the communicator calls them, in the same order): pnb_create_mpi,
  * pnb_publish_mesh, pnb_execute and pnb_destroy. A failure on any rank (a wrong count, NaN, a
