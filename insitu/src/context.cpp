@@ -240,10 +240,7 @@ void Context::require_cells_or_allowed_none(const MeshView& mesh) const {
   if (mesh.point_count() > 0) return;
   const std::string none = "pnb_publish_mesh: this part has no cell (point_count, connectivity_count and cell_types_count 0)";
   require(m_group->size() > 1, none + "; a part without cells is for one rank of a run over several ranks");
-  // Its light, occlusion and history would need an empty volume, grid and store part.
-  const bool lit = m_config.lighting && (m_config.lighting->occlusion_model || m_config.lighting->model == render::LightingModel::light_volume);
-  require(!lit, none + ", which a run lit by the light volume or occlusion does not take yet (\"none\" and \"phong\" do); "
-                       "create the context on a communicator without this rank (MPI_Comm_split)");
+  // Its history would need an empty store part, which the store and its replay do not write.
   require(!m_config.store, none + ", which a run with a store does not take yet; create the context on a communicator "
                                   "without this rank (MPI_Comm_split)");
 }

@@ -367,7 +367,9 @@ struct LightVolume::Impl {
 
 LightVolume::LightVolume(std::shared_ptr<const TetMesh> mesh, LightVolumeOptions options) {
   require(mesh != nullptr, "LightVolume: mesh is null; expected a prepared TetMesh");
-  require(!mesh->tets.empty(), "LightVolume: the mesh has no tets; expected at least one");
+  // With no tet (a rank's empty part), level 0 is still made and merged with the other ranks'.
+  require(!mesh->tets.empty() || !options.level0_bounds.empty(),
+          "LightVolume: the mesh has no tets; expected at least one, or level0_bounds to span");
   check_options(options);
   m_impl = std::make_unique<Impl>(*mesh, std::move(options));
 }
@@ -453,8 +455,13 @@ LightUpdateReport LightVolume::update(const LightBudget& budget) {
   Impl& im = *m_impl;
   if (!im.has_field)
     throw Error(ErrorCode::invalid_operation, "LightVolume::update: no field yet; call set_field first");
-  LightSchedule schedule(budget);
   LightUpdateReport report;
+  // A part with no point (a rank of a run over several that holds no cell) has nothing to light.
+  if (im.mesh->points.empty()) {
+    report.converged = true;
+    return report;
+  }
+  LightSchedule schedule(budget);
   report.resample_ms = std::exchange(im.combine_resample_ms, 0.0);
   im.resample_if_pending(schedule, report);
   schedule.keep_for_end(im.combination.expected_publish_ms());

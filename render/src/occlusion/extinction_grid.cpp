@@ -36,7 +36,7 @@ ExtinctionResampler::ExtinctionResampler(std::shared_ptr<const TetMesh> mesh, in
     : m_impl(std::make_unique<Impl>()) {
   require(mesh != nullptr, "ExtinctionResampler: mesh is null");
   require(resolution >= 2, "ExtinctionResampler: resolution = " + std::to_string(resolution) + "; expected >= 2");
-  require(!mesh->tets.empty() && !mesh->bounds.empty(), "ExtinctionResampler: the mesh has no tets");
+  require((!mesh->tets.empty() && !mesh->bounds.empty()) || !span.empty(), "ExtinctionResampler: the mesh has no tets");
   Bounds bounds = mesh->bounds;
   if (!span.empty()) {
     bounds.extend(span.lo);

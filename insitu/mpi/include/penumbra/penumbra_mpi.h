@@ -5,10 +5,9 @@
  * penumbra.h and these. Each rank publishes its own partition: its cells and the points they use
  * (points on partition boundaries appear on every rank that uses them), its fields on those
  * points or cells. A rank that holds none of the rendered region publishes a mesh with
- * point_count, connectivity_count and cell_types_count 0 (and fields of count 0) in an unlit or
- * Phong-lit run without a store; a run with the light volume, occlusion or a store refuses such
- * a part on every rank, naming it: create that context on a communicator without those ranks
- * (e.g. from MPI_Comm_split). Each rank ray casts its own cells; the runs where each ray is
+ * point_count, connectivity_count and cell_types_count 0 (and fields of count 0), lit or not; a
+ * run with a store refuses such a part on every rank, naming it: create that context on a
+ * communicator without those ranks (e.g. from MPI_Comm_split). Each rank ray casts its own cells; the runs where each ray is
  * inside a rank's cells are exchanged by image region through MPI, merged in depth order and
  * composited, so the picture is that of the whole mesh rendered in one process, whatever the
  * partition. Rank 0 writes the image database.
