@@ -48,11 +48,17 @@ StoredSegment::StoredSegment(const std::string& dir) : m_dir(dir) {
   if (dirs.empty()) dirs.push_back(dir);
   for (const std::string& d : dirs) m_parts.push_back(insitu::StoredRun::open(d));
   m_steps = m_parts.front()->step_count();
+  // A part with no point (a rank that held no cell) keeps steps and no field.
+  const insitu::StoredRun* with_points = nullptr;
   for (const auto& p : m_parts) {
     m_steps = std::min(m_steps, p->step_count());
-    if (p->fields() != m_parts.front()->fields())
+    if (p->mesh().point_count() == 0) continue;
+    if (!with_points) with_points = p.get();
+    if (p->fields() != with_points->fields())
       throw Error(ErrorCode::io_error, "stored segment '" + dir + "': its parts store different fields");
   }
+  if (!with_points) throw Error(ErrorCode::io_error, "stored segment '" + dir + "': no part has a cell");
+  m_fields = with_points->fields();
   for (std::size_t s = 0; s < m_steps; ++s)
     for (const auto& p : m_parts)
       if (p->cycle(s) != m_parts.front()->cycle(s))

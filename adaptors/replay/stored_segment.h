@@ -28,7 +28,8 @@ public:
   std::size_t step_count() const { return m_steps; }
   double time(std::size_t step) const { return m_parts.front()->time(step); }
   std::int64_t cycle(std::size_t step) const { return m_parts.front()->cycle(step); }
-  const std::vector<std::string>& fields() const { return m_parts.front()->fields(); }
+  /// The fields every part with points stores (a part with no point stores none).
+  const std::vector<std::string>& fields() const { return m_fields; }
   bool points_move() const;
   std::size_t cell_count() const;
   /// Keeps only the first `steps` steps (a later segment restarted from a checkpoint before them).
@@ -38,6 +39,7 @@ private:
   std::string m_dir;
   std::vector<std::unique_ptr<insitu::StoredRun>> m_parts;
   std::size_t m_steps = 0;
+  std::vector<std::string> m_fields;
 };
 
 /// The cells [first, last) of a segment, counted through its parts in order, as one mesh: the

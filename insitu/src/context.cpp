@@ -240,9 +240,6 @@ void Context::require_cells_or_allowed_none(const MeshView& mesh) const {
   if (mesh.point_count() > 0) return;
   const std::string none = "pnb_publish_mesh: this part has no cell (point_count, connectivity_count and cell_types_count 0)";
   require(m_group->size() > 1, none + "; a part without cells is for one rank of a run over several ranks");
-  // Its history would need an empty store part, which the store and its replay do not write.
-  require(!m_config.store, none + ", which a run with a store does not take yet; create the context on a communicator "
-                                  "without this rank (MPI_Comm_split)");
 }
 
 Context::MeshUpdate Context::plan_mesh_update(const MeshView& mesh) const {

@@ -231,8 +231,8 @@ private:
   /// The same over `group`: the decisions' group for what decide_step runs.
   template <class Phase>
   void agreed_on(RankGroup& group, const char* call, Phase&& phase);
-  /// A part with no cell is one rank's of a run over several ranks without a store; anything
-  /// else throws Error(invalid_argument) saying so.
+  /// A part with no cell is one rank's of a run over several ranks; in one process it throws
+  /// Error(invalid_argument) saying so.
   void require_cells_or_allowed_none(const MeshView& mesh) const;
   /// This rank's part of a publish: what changed, and the tet mesh for it in its own frame.
   struct MeshUpdate {

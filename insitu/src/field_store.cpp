@@ -92,6 +92,7 @@ void FieldStore::begin_segment(const MeshView& mesh) {
 
 void FieldStore::record_points(double time, std::int64_t cycle, const std::vector<Vec3d>& points, double thinnest_altitude) {
   if (m_segment_dir.empty()) throw Error(ErrorCode::invalid_operation, "store: no mesh published yet");
+  if (m_point_count == 0) return;  // an empty part (a rank with no cell) has no coordinates to keep
   if (!m_coordinates) m_coordinates = std::make_unique<CoordinateWriter>(m_segment_dir + "/coordinates", m_point_count, m_config);
   try {
     m_coordinates->record(time, cycle, points, thinnest_altitude);
@@ -104,6 +105,8 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
   if (m_segment_dir.empty()) throw Error(ErrorCode::invalid_operation, "store: no mesh published yet");
   require(values.size() == m_point_count, "store: field '" + field + "' has " + std::to_string(values.size()) +
                                               " values for " + std::to_string(m_point_count) + " points");
+  // An empty part (a rank with no cell) keeps its steps only, so that its segment's parts agree.
+  if (m_point_count == 0) return record_step(time, cycle);
   auto& enc = m_encoders[field];
   if (!enc) {
     compression::StreamingOptions o;
@@ -124,6 +127,10 @@ void FieldStore::record(const std::string& field, double time, std::int64_t cycl
   } catch (const Error& e) {
     throw Error(e.code(), "store: field '" + field + "' at cycle " + std::to_string(cycle) + ": " + e.what());
   }
+  record_step(time, cycle);
+}
+
+void FieldStore::record_step(double time, std::int64_t cycle) {
   if (m_steps.empty() || m_steps.back().first != cycle) {
     m_steps.emplace_back(cycle, time);
     write_steps();

@@ -66,6 +66,8 @@ public:
 
 private:
   void write_steps();
+  /// The step in steps.csv, once per cycle.
+  void record_step(double time, std::int64_t cycle);
   StoreConfig m_config;
   int m_part = 0, m_parts = 1;
   int m_segment = -1;

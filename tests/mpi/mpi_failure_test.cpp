@@ -10,8 +10,6 @@
 //         empty  rank 1's mesh descriptor is refused before its contents are read (point_count
 //                0): every rank's pnb_publish_mesh fails naming rank 1 (none goes on alone into
 //                the call's collectives); the good mesh then renders
-//         no-cells  rank 1 publishes a part with no cell (every count 0), which a run with a store
-//                does not take yet: every rank's pnb_publish_mesh fails naming rank 1 and saying so
 //         time   rank 1 passes another time (100) for step 0: every rank's pnb_execute fails
 //                naming rank 1 (the ranks disagree on the step); with "every_time": 1, steps 1
 //                and 2 then render on every rank (the refused step left the time rule as it was)
@@ -161,19 +159,6 @@ bool async_failure(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   return rendered(ctx, outcome(ctx, pnb_finalize(ctx)), 4, rank) && good;
 }
 
-bool no_cells(pnb_context ctx, const OwnedMesh& mesh, int rank) {
-  pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
-  if (rank == kFaultyRank) m.point_count = m.connectivity_count = m.cell_types_count = 0;
-  const Outcome o = outcome(ctx, pnb_publish_mesh(ctx, &m, PNB_COPY));
-  bool good = failed_naming_it(o, "pnb_publish_mesh (no cell on rank 1, with a store)", rank);
-  if (o.message.find("a run with a store does not take yet") == std::string::npos) {
-    std::fprintf(stderr, "rank %d: the refusal does not say why: %s\n", rank, o.message.c_str());
-    good = false;
-  }
-  good = publish(ctx, mesh, rank) && good;
-  return rendered(ctx, step(ctx, mesh, 0, 0, false), 0, rank) && good;
-}
-
 bool other_time(pnb_context ctx, const OwnedMesh& mesh, int rank) {
   bool good = publish(ctx, mesh, rank);
   good = failed_naming_it(step(ctx, mesh, 0, rank == kFaultyRank ? 100 : 0, false), "step 0 (another time on rank 1)", rank) && good;
@@ -224,7 +209,6 @@ bool run(pnb_context ctx, const std::string& kind, const OwnedMesh& mesh, int ra
   if (kind == "nan") return nan_field(ctx, mesh, rank);
   if (kind == "index") return bad_index(ctx, mesh, rank);
   if (kind == "empty") return refused_descriptor(ctx, mesh, rank);
-  if (kind == "no-cells") return no_cells(ctx, mesh, rank);
   if (kind == "time") return other_time(ctx, mesh, rank);
   if (kind == "cycle") return other_cycle(ctx, mesh, rank);
   if (kind == "async") return async_failure(ctx, mesh, rank);
@@ -243,7 +227,7 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   if (argc != 3 || ranks <= kFaultyRank || (async && provided != MPI_THREAD_MULTIPLE)) {
-    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|no-cells|time|cycle|write|async\n", argv[0]);
+    if (rank == 0) std::fprintf(stderr, "usage: mpirun -np 3 %s OUT_DIR nan|index|empty|time|cycle|write|async\n", argv[0]);
     MPI_Finalize();
     return 2;
   }

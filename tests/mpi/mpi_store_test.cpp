@@ -4,10 +4,11 @@
 // by store_kill_restart.sh.
 //
 // Usage:
-//   penumbra_mpi_store_test write OUT PARTITION FIRST LAST [kill=RANK@STEP] [resume]   (under mpirun)
-//       steps FIRST..LAST-1 of the test mesh cut by PARTITION into OUT/db and OUT/store; with
-//       kill, rank RANK aborts once step STEP is rendered (mpirun then kills the others); with
-//       resume, the database is resumed (a restart from a checkpoint)
+//   penumbra_mpi_store_test write OUT PARTITION FIRST LAST [kill=RANK@STEP] [resume] [empty=RANK]
+//       (under mpirun) steps FIRST..LAST-1 of the test mesh cut by PARTITION into OUT/db and
+//       OUT/store; with kill, rank RANK aborts once step STEP is rendered (mpirun then kills the
+//       others); with resume, the database is resumed (a restart from a checkpoint); with empty,
+//       rank RANK publishes no cell and the others split the mesh among themselves
 //   penumbra_mpi_store_test reference OUT FIRST LAST   the whole mesh, exact fields, one process,
 //       into OUT/reference
 //   penumbra_mpi_store_test config DIR                 prints the config that renders into DIR
@@ -75,13 +76,18 @@ int write(const std::vector<std::string>& a) {
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   const std::string out = a.at(0), kind = a.at(1);
   const int first = std::stoi(a.at(2)), last = std::stoi(a.at(3));
-  int kill_step = -1;
+  int kill_step = -1, empty_rank = -1;
   bool resume = false;
   for (std::size_t i = 4; i < a.size(); ++i) {
     if (a[i].rfind("kill=", 0) == 0 && std::stoi(a[i].substr(5)) == rank) kill_step = std::stoi(a[i].substr(a[i].find('@') + 1));
     resume = resume || a[i] == "resume";
+    if (a[i].rfind("empty=", 0) == 0) empty_rank = std::stoi(a[i].substr(6));
   }
-  const auto part = penumbra::mpi_test::partition(penumbra::fixtures::tet_block_with_hole(8), kind, rank, ranks, false);
+  const auto whole = penumbra::fixtures::tet_block_with_hole(8);
+  const penumbra::mpi_test::Part part =
+      empty_rank < 0       ? penumbra::mpi_test::partition(whole, kind, rank, ranks, false)
+      : rank == empty_rank ? penumbra::mpi_test::Part{}
+                           : penumbra::mpi_test::partition(whole, kind, rank < empty_rank ? rank : rank - 1, ranks - 1, false);
   pnb_context ctx = nullptr;
   int good = ok(nullptr, pnb_create_mpi(config(out + "/db", out + "/store", resume).c_str(), MPI_COMM_WORLD, &ctx),
                 "pnb_create_mpi") ? 1 : 0;

@@ -16,9 +16,11 @@ run -np 3 "$bin" write "$out" slabs 0 16 kill=1@13 >"$out/killed.log" 2>&1 && fa
 # What it left replays as it is: the database index is whole and the store's finished windows read.
 "$replay" "$("$bin" config "$out/after-kill")" "$out/store" --quiet || fail "the store of the killed run does not replay"
 
-# 2. Restarted from the checkpoint at cycle 8 on two ranks cut by METIS: the database is resumed
-#    and the store continues in a new segment.
-run -np 2 "$bin" write "$out" metis 8 16 resume || fail "the restart failed"
+# 2. Restarted from the checkpoint at cycle 8 on four ranks, three with METIS parts and rank 1
+#    with no cell (its store part keeps steps only): the database is resumed and the store
+#    continues in a new segment.
+run -np 4 "$bin" write "$out" metis 8 16 resume empty=1 || fail "the restart failed"
+[ -f "$out/store/segment-001/part-00001/steps.csv" ] || fail "the empty part kept no steps"
 [ -f "$out/store/segment-001/parts.txt" ] || fail "the restart did not begin segment-001 with its parts"
 
 # 3. The whole store over four ranks and in one process.

@@ -5,12 +5,11 @@
  * penumbra.h and these. Each rank publishes its own partition: its cells and the points they use
  * (points on partition boundaries appear on every rank that uses them), its fields on those
  * points or cells. A rank that holds none of the rendered region publishes a mesh with
- * point_count, connectivity_count and cell_types_count 0 (and fields of count 0), lit or not; a
- * run with a store refuses such a part on every rank, naming it: create that context on a
- * communicator without those ranks (e.g. from MPI_Comm_split). Each rank ray casts its own cells; the runs where each ray is
- * inside a rank's cells are exchanged by image region through MPI, merged in depth order and
- * composited, so the picture is that of the whole mesh rendered in one process, whatever the
- * partition. Rank 0 writes the image database.
+ * point_count, connectivity_count and cell_types_count 0 (and fields of count 0): it renders,
+ * lights and stores nothing of its own and takes part in every agreement. Each rank ray casts its
+ * own cells; the runs where each ray is inside a rank's cells are exchanged by image region
+ * through MPI, merged in depth order and composited, so the picture is that of the whole mesh
+ * rendered in one process, whatever the partition. Rank 0 writes the image database.
  *
  * Collective (every rank of the communicator calls them, in the same order): pnb_create_mpi,
  * pnb_publish_mesh, pnb_execute and pnb_destroy. A failure on any rank (a wrong count, NaN, a
