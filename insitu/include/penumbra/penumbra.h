@@ -62,7 +62,9 @@ typedef enum { PNB_POINT_FIELD = 0, PNB_CELL_FIELD = 1 } pnb_association;
  * cell_types: one uint8 VTK id per cell, or a single entry when cell_types_count == 1.
  * topology_version: bump when the connectivity changes (cells, their points, the point count);
  *                   points may move under an unchanged version (Lagrangian and ALE codes: see
- *                   pnb_publish_mesh). */
+ *                   pnb_publish_mesh).
+ * Over MPI ranks (penumbra_mpi.h), a rank with no cell gives point_count, connectivity_count and
+ * cell_types_count 0 (the arrays may then be NULL); in one process a mesh has points and cells. */
 typedef struct {
   uint32_t struct_size; /* sizeof(pnb_mesh_desc) as the caller was compiled (PNB_MESH_DESC_INIT) */
   const void* points;
