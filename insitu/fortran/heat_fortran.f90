@@ -4,6 +4,7 @@
 program heat_fortran
   use, intrinsic :: iso_c_binding
   use penumbra
+  use hex_slab
   implicit none
   integer, parameter :: n = 12, np = (n + 1)**3, nc = n**3, steps = 20
   real(c_double), target :: xyz(3, np), temp(np), next(np)
@@ -18,7 +19,7 @@ program heat_fortran
   type(pnb_step_stats) :: stats
   type(pnb_needs) :: needs
   integer :: asked_to_render = 0
-  integer :: i, j, k, c, s, status, p
+  integer :: s, status
 
   ! The types' struct_size defaults must be their C sizes (insitu/fortran/CMakeLists.txt).
   if (mesh%struct_size /= c_sizeof(mesh) .or. field%struct_size /= c_sizeof(field) .or. &
@@ -26,25 +27,9 @@ program heat_fortran
   outdir = 'penumbra-fortran-db'
   if (command_argument_count() >= 1) call get_command_argument(1, outdir)
 
-  do k = 0, n
-    do j = 0, n
-      do i = 0, n
-        p = 1 + i + (n + 1) * (j + (n + 1) * k)
-        xyz(:, p) = [real(i, c_double), real(j, c_double), real(k, c_double)] / n
-        temp(p) = exp(-40.0d0 * sum((xyz(:, p) - 0.5d0)**2))
-      end do
-    end do
-  end do
-  c = 0
-  do k = 0, n - 1
-    do j = 0, n - 1
-      do i = 0, n - 1
-        c = c + 1
-        conn(:, c) = [id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k), &
-                      id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)]
-      end do
-    end do
-  end do
+  call hex_slab_points(n, 0, n, xyz)
+  call hex_slab_cells(n, 0, n, conn)
+  temp = exp(-40.0d0 * sum((xyz - 0.5d0)**2, dim=1))
   types(1) = PNB_HEXAHEDRON
 
   config = '{"output":{"directory":"' // trim(outdir) // '","if_exists":"resume"},' // &
@@ -96,11 +81,6 @@ program heat_fortran
   print '(a)', 'wrote ' // trim(outdir)
 
 contains
-
-  integer(c_int32_t) function id(i, j, k)
-    integer, intent(in) :: i, j, k
-    id = int(i + (n + 1) * (j + (n + 1) * k), c_int32_t)   ! zero-based, as the C API expects
-  end function
 
   subroutine diffuse()
     integer :: a, b, q, r

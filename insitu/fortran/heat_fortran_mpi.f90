@@ -7,6 +7,7 @@ program heat_fortran_mpi
   use, intrinsic :: iso_c_binding
   use mpi
   use penumbra
+  use hex_slab
   implicit none
   integer, parameter :: n = 12, steps = 10
   real(c_double), allocatable, target :: xyz(:, :), temp(:)
@@ -33,7 +34,10 @@ program heat_fortran_mpi
   np = merge((n + 1)**2 * (k1 - k0 + 1), 0, k1 > k0)
   nc = n**2 * (k1 - k0)
   allocate(xyz(3, np), temp(np), conn(8, nc))
-  call build_slab()
+  if (np > 0) then
+    call hex_slab_points(n, k0, k1, xyz)
+    call hex_slab_cells(n, k0, k1, conn)
+  end if
   types(1) = PNB_HEXAHEDRON
 
   ctx = c_null_ptr
@@ -83,34 +87,6 @@ program heat_fortran_mpi
   if (status /= PNB_OK) stop 2
 
 contains
-
-  subroutine build_slab()
-    integer :: i, j, k, c, p
-    if (np == 0) return
-    do k = k0, k1
-      do j = 0, n
-        do i = 0, n
-          p = 1 + id(i, j, k)
-          xyz(:, p) = [real(i, c_double), real(j, c_double), real(k, c_double)] / n
-        end do
-      end do
-    end do
-    c = 0
-    do k = k0, k1 - 1
-      do j = 0, n - 1
-        do i = 0, n - 1
-          c = c + 1
-          conn(:, c) = [id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k), &
-                        id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)]
-        end do
-      end do
-    end do
-  end subroutine
-
-  integer(c_int32_t) function id(i, j, k)
-    integer, intent(in) :: i, j, k
-    id = int(i + (n + 1) * (j + (n + 1) * (k - k0)), c_int32_t)   ! zero-based and local, as the C API expects
-  end function
 
   ! For the collective calls: a failure is every rank's (they agree on it), so each stops alike.
   subroutine check(st)
