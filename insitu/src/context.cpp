@@ -124,12 +124,13 @@ std::int64_t cycle_of(double high, double low) {
 std::string step_disagreement(RankGroup& group, double time, std::int64_t cycle) {
   const CycleHalves c = halves_of(cycle);
   const std::vector<double> all = group.all_gather({time, c.high, c.low});
+  auto differs = [&](std::size_t r) { return !std::equal(all.begin() + 3 * r, all.begin() + 3 * r + 3, all.begin()); };
   auto step_of = [&](std::size_t r) {
     return "time " + format_number(all[3 * r]) + ", cycle " + std::to_string(cycle_of(all[3 * r + 1], all[3 * r + 2]));
   };
   std::string text = "pnb_execute: every rank must pass the same time and cycle;";
   for (std::size_t r = 1; 3 * r + 2 < all.size(); ++r)
-    if (step_of(r) != step_of(0)) text += " rank " + std::to_string(r) + " passed " + step_of(r) + ";";
+    if (differs(r)) text += " rank " + std::to_string(r) + " passed " + step_of(r) + ";";
   return text + " rank 0 passed " + step_of(0);
 }
 

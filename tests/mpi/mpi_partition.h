@@ -92,6 +92,14 @@ inline Part partition(const OwnedMesh& whole, const std::string& kind, int rank,
   return part;
 }
 
+// This rank's part: its share of `whole`, or none on `empty_rank` (-1: no rank is empty), whose
+// share the other ranks split among themselves.
+inline Part part_of(const OwnedMesh& whole, const std::string& kind, int rank, int ranks, bool with_ghosts, int empty_rank) {
+  if (empty_rank < 0) return partition(whole, kind, rank, ranks, with_ghosts);
+  if (rank == empty_rank) return Part{};
+  return partition(whole, kind, rank < empty_rank ? rank : rank - 1, ranks - 1, with_ghosts);
+}
+
 // `mesh` as the C API takes it (topology_version 1).
 inline pnb_mesh_desc mesh_desc(const OwnedMesh& mesh) {
   pnb_mesh_desc m = PNB_MESH_DESC_INIT;

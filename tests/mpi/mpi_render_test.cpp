@@ -76,14 +76,6 @@ std::string config(const std::string& dir, const std::string& lighting, const st
   return c + "}";
 }
 
-// This rank's part: its share of the whole mesh, or none on `empty_rank`, whose share the other
-// ranks split among themselves.
-Part part_of(const OwnedMesh& whole, const std::string& kind, int rank, int ranks, bool ghosts, int empty_rank) {
-  if (empty_rank < 0) return partition(whole, kind, rank, ranks, ghosts);
-  if (rank == empty_rank) return Part{};
-  return partition(whole, kind, rank < empty_rank ? rank : rank - 1, ranks - 1, ghosts);
-}
-
 bool ok(pnb_context ctx, pnb_status s, const char* what, int rank) {
   if (s == PNB_OK) return true;
   std::fprintf(stderr, "rank %d: %s: %s\n", rank, what, pnb_last_error(ctx));
@@ -437,7 +429,7 @@ int main(int argc, char** argv) {
     good = 0;
   }
   if (ctx) {
-    good = run(ctx, part_of(whole, kind, rank, ranks, ghosts, empty_rank), rank, fail, fail_rank) ? good : 0;
+    good = run(ctx, penumbra::mpi_test::part_of(whole, kind, rank, ranks, ghosts, empty_rank), rank, fail, fail_rank) ? good : 0;
     pnb_destroy(ctx);
   }
   if (rank == 0) {

@@ -84,10 +84,7 @@ int write(const std::vector<std::string>& a) {
     if (a[i].rfind("empty=", 0) == 0) empty_rank = std::stoi(a[i].substr(6));
   }
   const auto whole = penumbra::fixtures::tet_block_with_hole(8);
-  const penumbra::mpi_test::Part part =
-      empty_rank < 0       ? penumbra::mpi_test::partition(whole, kind, rank, ranks, false)
-      : rank == empty_rank ? penumbra::mpi_test::Part{}
-                           : penumbra::mpi_test::partition(whole, kind, rank < empty_rank ? rank : rank - 1, ranks - 1, false);
+  const penumbra::mpi_test::Part part = penumbra::mpi_test::part_of(whole, kind, rank, ranks, false, empty_rank);
   pnb_context ctx = nullptr;
   int good = ok(nullptr, pnb_create_mpi(config(out + "/db", out + "/store", resume).c_str(), MPI_COMM_WORLD, &ctx),
                 "pnb_create_mpi") ? 1 : 0;

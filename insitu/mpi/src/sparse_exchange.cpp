@@ -8,20 +8,13 @@
 
 namespace penumbra::insitu {
 
-int partners(const int* counts, int ranks) {
-  int n = 0;
-  for (int r = 0; r < ranks; ++r) n += counts[r] > 0 ? 1 : 0;
-  return n;
-}
-
 void sparse_alltoallv(const void* send, const int* send_counts, const int* send_offsets, void* receive,
                       const int* receive_counts, const int* receive_offsets, MPI_Datatype type, MPI_Comm comm, int tag) {
   int ranks = 1;
   MPI_Comm_size(comm, &ranks);
   MPI_Aint lower = 0, extent = 0;
   check_mpi(MPI_Type_get_extent(type, &lower, &extent), "MPI_Type_get_extent");
-  std::vector<MPI_Request> requests;
-  requests.reserve(static_cast<std::size_t>(partners(send_counts, ranks) + partners(receive_counts, ranks)));
+  std::vector<MPI_Request> requests;  // handles: values that MPI_Waitall reads wherever they lie
   // Receives first, so that a send finds its receive posted.
   for (int r = 0; r < ranks; ++r) {
     if (receive_counts[r] == 0) continue;

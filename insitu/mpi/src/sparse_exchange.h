@@ -16,8 +16,4 @@ namespace penumbra::insitu {
 void sparse_alltoallv(const void* send, const int* send_counts, const int* send_offsets, void* receive,
                       const int* receive_counts, const int* receive_offsets, MPI_Datatype type, MPI_Comm comm, int tag);
 
-/// The ranks `counts` (one per rank of `comm`) names with a count above zero: the messages one
-/// side of sparse_alltoallv posts.
-int partners(const int* counts, int ranks);
-
 }  // namespace penumbra::insitu
