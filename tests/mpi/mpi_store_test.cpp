@@ -4,11 +4,12 @@
 // by store_kill_restart.sh.
 //
 // Usage:
-//   penumbra_mpi_store_test write OUT PARTITION FIRST LAST [kill=RANK@STEP] [resume] [empty=RANK]
+//   penumbra_mpi_store_test write OUT PARTITION FIRST LAST [kill=RANK@STEP] [resume] [empty=RANK] [ghosts]
 //       (under mpirun) steps FIRST..LAST-1 of the test mesh cut by PARTITION into OUT/db and
 //       OUT/store; with kill, rank RANK aborts once step STEP is rendered (mpirun then kills the
 //       others); with resume, the database is resumed (a restart from a checkpoint); with empty,
-//       rank RANK publishes no cell and the others split the mesh among themselves
+//       rank RANK publishes no cell and the others split the mesh among themselves; with ghosts,
+//       each rank also publishes its neighbours' cells that share its points, marked ghost
 //   penumbra_mpi_store_test reference OUT FIRST LAST   the whole mesh, exact fields, one process,
 //       into OUT/reference
 //   penumbra_mpi_store_test config DIR                 prints the config that renders into DIR
@@ -17,6 +18,7 @@
 //       every cycle of A's
 #include <mpi.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -52,9 +54,12 @@ bool ok(pnb_context ctx, pnb_status s, const char* what) {
   return false;
 }
 
-// Publishes `mesh` and renders steps [first, last); `kill` aborts after step kill_step.
-bool run_steps(pnb_context ctx, const OwnedMesh& mesh, int first, int last, int kill_step) {
-  const pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
+// Publishes `mesh` (its cells marked by `ghosts` when given) and renders steps [first, last);
+// `kill` aborts after step kill_step.
+bool run_steps(pnb_context ctx, const OwnedMesh& mesh, const std::vector<std::uint8_t>& ghosts, int first, int last,
+               int kill_step) {
+  pnb_mesh_desc m = penumbra::mpi_test::mesh_desc(mesh);
+  m.cell_ghosts = ghosts.empty() ? nullptr : ghosts.data();
   if (!ok(ctx, pnb_publish_mesh(ctx, &m, PNB_BORROW), "pnb_publish_mesh")) return false;
   for (int step = first; step < last; ++step) {
     const auto values = penumbra::fixtures::sample(mesh, [step](double x, double y, double z) { return field_at(x, y, z, step); });
@@ -77,19 +82,20 @@ int write(const std::vector<std::string>& a) {
   const std::string out = a.at(0), kind = a.at(1);
   const int first = std::stoi(a.at(2)), last = std::stoi(a.at(3));
   int kill_step = -1, empty_rank = -1;
-  bool resume = false;
+  bool resume = false, ghosts = false;
   for (std::size_t i = 4; i < a.size(); ++i) {
     if (a[i].rfind("kill=", 0) == 0 && std::stoi(a[i].substr(5)) == rank) kill_step = std::stoi(a[i].substr(a[i].find('@') + 1));
     resume = resume || a[i] == "resume";
+    ghosts = ghosts || a[i] == "ghosts";
     if (a[i].rfind("empty=", 0) == 0) empty_rank = std::stoi(a[i].substr(6));
   }
   const auto whole = penumbra::fixtures::tet_block_with_hole(8);
-  const penumbra::mpi_test::Part part = penumbra::mpi_test::part_of(whole, kind, rank, ranks, false, empty_rank);
+  const penumbra::mpi_test::Part part = penumbra::mpi_test::part_of(whole, kind, rank, ranks, ghosts, empty_rank);
   pnb_context ctx = nullptr;
   int good = ok(nullptr, pnb_create_mpi(config(out + "/db", out + "/store", resume).c_str(), MPI_COMM_WORLD, &ctx),
                 "pnb_create_mpi") ? 1 : 0;
   if (ctx) {
-    good = run_steps(ctx, part.mesh, first, last, kill_step) ? good : 0;
+    good = run_steps(ctx, part.mesh, part.ghosts, first, last, kill_step) ? good : 0;
     pnb_destroy(ctx);
   }
   int all = 0;
@@ -100,7 +106,7 @@ int write(const std::vector<std::string>& a) {
 int reference(const std::vector<std::string>& a) {
   pnb_context ctx = nullptr;
   if (!ok(nullptr, pnb_create(config(a.at(0) + "/reference", "", false).c_str(), &ctx), "pnb_create")) return 1;
-  const bool good = run_steps(ctx, penumbra::fixtures::tet_block_with_hole(8), std::stoi(a.at(1)), std::stoi(a.at(2)), -1);
+  const bool good = run_steps(ctx, penumbra::fixtures::tet_block_with_hole(8), {}, std::stoi(a.at(1)), std::stoi(a.at(2)), -1);
   pnb_destroy(ctx);
   return good ? 0 : 1;
 }

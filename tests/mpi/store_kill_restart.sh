@@ -10,9 +10,11 @@ fail() { echo "store_kill_restart: $*" >&2; exit 1; }
 ulimit -c 0
 rm -rf "$out" && mkdir -p "$out" || fail "cannot make $out"
 
-# 1. Three ranks on slabs, steps 0..15 (store windows of 8 steps); rank 1 is killed once step 13
-#    is rendered, five steps after the first window closed.
-run -np 3 "$bin" write "$out" slabs 0 16 kill=1@13 >"$out/killed.log" 2>&1 && fail "the killed run exited 0"
+# 1. Three ranks on slabs, each with a halo of its neighbours' cells marked ghost (stored once,
+#    by their own rank: a ghost stored twice would darken the replays), steps 0..15 (store
+#    windows of 8 steps); rank 1 is killed once step 13 is rendered, five steps after the first
+#    window closed.
+run -np 3 "$bin" write "$out" slabs 0 16 kill=1@13 ghosts >"$out/killed.log" 2>&1 && fail "the killed run exited 0"
 # What it left replays as it is: the database index is whole and the store's finished windows read.
 "$replay" "$("$bin" config "$out/after-kill")" "$out/store" --quiet || fail "the store of the killed run does not replay"
 
